@@ -1,0 +1,94 @@
+//! Attitude of a microsatellite from GNSS signals received on three antennas.
+//!
+//! `gnss-attitude` is the onboard half of a GNSS attitude receiver: it turns what three
+//! phase-coherent antennas receive into the attitude of the spacecraft, with a covariance and
+//! health flags that flight software can act on. Its desktop twin, `host-sim`, synthesizes the
+//! truth, the signals and the measurements, and runs every estimator against them.
+//!
+//! # Design contract
+//!
+//! Flight software links this crate into an interrupt-driven loop on a Cortex-M4F/M7. The crate
+//! therefore promises:
+//!
+//! * **No allocation.** `#![no_std]` without `alloc`. Every size is a compile-time constant
+//!   (const generics on [`nalgebra::SMatrix`], [`heapless`] containers). What a type holds is what
+//!   it costs; nothing grows.
+//! * **No panics.** No `unwrap`, no indexing that can fail, no unbounded iteration. Every fallible
+//!   call returns a `Result` whose error is a small `#[non_exhaustive]` enum with documented
+//!   causes (see [`error`]). Non-finite input is rejected at the boundary, never propagated into a
+//!   filter state. A call that fails leaves the object it was called on unchanged.
+//! * **Bounded time.** Every iterative routine has a fixed iteration bound, stated in its
+//!   documentation. The nalgebra decompositions that iterate without bound (`SVD::new`,
+//!   `SymmetricEigen::new`, `Rotation3::from_matrix`) are not used; the crate uses closed forms,
+//!   Cholesky factorizations and bounded iterations instead.
+//! * **f32 that survives long runs.** Estimators run in `f32` (the Cortex-M4F FPU is single
+//!   precision) and are written so that `f32` is enough: Joseph-form covariance updates,
+//!   enforced symmetry, variance floors, innovation gating. The numerical code is generic over
+//!   [`Real`] so that tests run the very same code in `f64` and compare.
+//! * **Features only add.** The `defmt` feature derives `defmt::Format` on the public data types
+//!   and routes the crate's log macros to defmt; without it the log macros compile to nothing.
+//!   No feature changes a numerical result.
+//!
+//! # Layout: the data path, top to bottom
+//!
+//! | Module | What it is |
+//! |---|---|
+//! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
+//! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
+//! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
+//! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
+//! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
+//!
+//! # Frames and units
+//!
+//! SI units throughout (metres, seconds, radians) unless a name says otherwise
+//! (`_deg`, `_hz`, `_chips`). Frame conventions are stated once, in [`geometry`], and every
+//! public item names the frame of each vector it takes or returns.
+//!
+//! # Features
+//!
+//! * `defmt`: `defmt::Format` for the public data types; log output through defmt.
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![warn(
+    clippy::use_self,
+    clippy::doc_markdown,
+    clippy::semicolon_if_nothing_returned,
+    clippy::cast_lossless,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic
+)]
+// `!(x > y)` is used on purpose: unlike `x <= y` it is true for NaN, so a NaN fails the check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
+#![cfg_attr(docsrs, feature(doc_cfg))]
+
+#[macro_use]
+mod log;
+
+pub mod ekf;
+pub mod error;
+pub mod geometry;
+pub mod noise;
+pub mod selftest;
+
+#[cfg(feature = "defmt")]
+mod defmt_impls;
+
+pub use error::{ErrorKind, FilterError, GeometryError};
+
+/// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
+/// reference runs of the tests.
+///
+/// Implemented for every [`nalgebra::RealField`] that is `Copy` (in practice `f32` and `f64`).
+pub trait Real: nalgebra::RealField + Copy {}
+
+impl<T: nalgebra::RealField + Copy> Real for T {}
+
+/// Converts an `f64` constant into the scalar type `T` (exact for `f64`, rounded for `f32`).
+#[inline]
+pub(crate) fn real<T: Real>(value: f64) -> T {
+    nalgebra::convert(value)
+}
