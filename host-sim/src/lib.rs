@@ -1,0 +1,16 @@
+//! host-sim: the desktop twin of `gnss-attitude`.
+//!
+//! It synthesizes what the onboard crate consumes — truth motion, satellite geometry,
+//! three-antenna signals and measurements — runs the crate's estimators on it, and reports the
+//! result against the truth, against the theoretical bound for the same data, and against the
+//! figures printed in the source papers.
+//!
+//! * [`scenarios`]: one module per experiment, registered in [`scenarios::SCENARIOS`].
+//! * [`truth`]: the f64 truth models (attitude kinematics, ...).
+//! * [`report`]: JSON summary, CSV time series, PNG plots, progress bars.
+//! * [`stats`]: small statistics helpers (RMS, percentiles, χ² intervals).
+
+pub mod report;
+pub mod scenarios;
+pub mod stats;
+pub mod truth;
