@@ -1,0 +1,104 @@
+//! Budgets: instructions (counted by QEMU's `insnmark` plugin between marker instructions) and
+//! stack (by painting) of single calls into the core.
+//!
+//! Each measured region prints `budget region <n>: <name>, stack <bytes> B`; the plugin prints
+//! `insnmark: region <n>: <count> instructions` for the same `<n>`. `.ci/run` joins the two.
+//! To add a budget, write a function below and call it from [`run_all`].
+
+use core::hint::black_box;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use cortex_m_semihosting::hprintln;
+use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
+use gnss_attitude::selftest::ConstantVelocityModel;
+use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector4};
+
+static REGION: AtomicU32 = AtomicU32::new(0);
+
+const PAINT: u32 = 0xCCCC_CCCC;
+
+extern "C" {
+    static mut _stack_end: u32;
+}
+
+/// Paints the free stack, from its bottom to 32 bytes below the current stack pointer (inlined
+/// into the caller, so that the painted region ends just under the caller's frame).
+#[inline(always)]
+fn paint_free_stack() {
+    let sp = cortex_m::register::msp::read() as usize;
+    // SAFETY: the words between the stack's bottom and SP − 32 are not live (the stack grows
+    // down and nothing below SP is in use on a single-threaded system without interrupts).
+    unsafe {
+        let mut p = core::ptr::addr_of_mut!(_stack_end);
+        while (p as usize) < sp - 32 {
+            core::ptr::write_volatile(p, PAINT);
+            p = p.add(1);
+        }
+    }
+}
+
+/// Bytes of stack used below `sp` since [`paint_free_stack`].
+fn stack_used_below(sp: usize) -> usize {
+    // SAFETY: reads words of the stack region below SP; volatile, no aliasing with live data.
+    unsafe {
+        let mut p = core::ptr::addr_of!(_stack_end);
+        while (p as usize) < sp && core::ptr::read_volatile(p) == PAINT {
+            p = p.add(1);
+        }
+        sp.saturating_sub(p as usize)
+    }
+}
+
+/// Runs `f` once between the instruction-count markers and reports its stack use.
+#[inline(never)]
+pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
+    let n = REGION.fetch_add(1, Ordering::Relaxed);
+    paint_free_stack();
+    let sp = cortex_m::register::msp::read() as usize;
+    // SAFETY: the markers are register-to-self moves with no effect on program state.
+    unsafe { core::arch::asm!("mov r8, r8") };
+    let out = black_box(f());
+    unsafe { core::arch::asm!("mov r9, r9") };
+    let used = stack_used_below(sp);
+    hprintln!("budget region {}: {}, stack {} B", n, name, used);
+    out
+}
+
+/// Every budget of the firmware, in region order.
+pub fn run_all() {
+    ekf_budgets();
+}
+
+fn ekf_budgets() {
+    let model = ConstantVelocityModel::new(0.1, 0.2, 0.5);
+    let mut cv = match Ekf::new(Vector4::new(1.0, 2.0, 0.5, -0.5), Matrix4::identity() * 4.0) {
+        Ok(k) => k,
+        Err(_) => return,
+    };
+    let z = Vector2::new(1.1, 1.9);
+    let _ = measure("ekf4 predict+update2 (constant velocity, Joseph, gated)", || {
+        model.step(black_box(&mut cv), black_box(&z)).is_ok()
+    });
+
+    let p0 = SMatrix::<f32, 6, 6>::from_diagonal(&SVector::from([1e-2, 1e-2, 1e-2, 1e-4, 1e-4, 1e-4]));
+    let mut six = match Ekf::<6>::new(SVector::zeros(), p0) {
+        Ok(k) => k,
+        Err(_) => return,
+    };
+    let mut f = SMatrix::<f32, 6, 6>::identity();
+    f.fixed_view_mut::<3, 3>(0, 3).fill_with_identity();
+    let q = SMatrix::<f32, 6, 6>::identity() * 1e-8;
+    let h = SMatrix::<f32, 3, 6>::from_fn(|i, j| if j < 3 { (i as f32 + 2.0 * j as f32) * 0.1 - 0.2 } else { 0.0 });
+    let r = SMatrix::<f32, 3, 3>::identity() * 1e-4;
+    let y = SVector::<f32, 3>::new(1e-3, -2e-3, 5e-4);
+    let gate = Some(NisGate::chi_square(3, GateConfidence::P999));
+    let _ = measure("ekf6 predict+update3 (Joseph, gated)", || {
+        let a = black_box(&mut six).predict(black_box(&f), black_box(&q)).is_ok();
+        a && six.update(black_box(&y), &h, &r, gate).is_ok()
+    });
+    let r_diag = r.diagonal();
+    let _ = measure("ekf6 predict+sequential3 (scalar Joseph)", || {
+        let a = black_box(&mut six).predict(black_box(&f), black_box(&q)).is_ok();
+        a && six.update_sequential(black_box(&y), &h, &r_diag, None).is_ok()
+    });
+}

@@ -1,0 +1,92 @@
+//! Self-check and budget firmware of gnss-attitude for the Cortex-M4F (`thumbv7em-none-eabihf`).
+//!
+//! Runs under `qemu-system-arm -machine netduinoplus2` (an STM32F405) and on real STM32F4-class
+//! parts. It
+//!
+//! 1. runs the core's deterministic self-test and compares it with the report `build.rs`
+//!    computed on the host; prints `selfcheck ekf: PASS|FAIL ...`;
+//! 2. measures budgets: each `budget::measure` region is bracketed by the marker instructions
+//!    that QEMU's `insnmark` plugin counts (`mov r8, r8` … `mov r9, r9`), and its stack use is
+//!    measured by painting the free stack before the call;
+//! 3. exits through semihosting with success only if every self-check passed.
+//!
+//! Semihosting needs a debugger (or QEMU): on a board without one, the `hprintln!` calls halt.
+#![no_std]
+#![no_main]
+
+mod budget;
+
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::{debug, hprintln};
+use gnss_attitude::selftest::{run_ekf_self_test, SelfTestReport};
+
+include!(concat!(env!("OUT_DIR"), "/expected.rs"));
+
+/// Largest relative difference accepted between the target's and the host's self-test
+/// (both are IEEE-754 f32 with the same libm; differences come only from instruction
+/// selection, e.g. fused multiply-add).
+const TOLERANCE: f32 = 1e-4;
+
+#[entry]
+fn main() -> ! {
+    let mut all_passed = true;
+
+    match run_ekf_self_test() {
+        Ok(report) => {
+            let diff = report.max_relative_difference(&EXPECTED);
+            let pass = diff <= TOLERANCE;
+            all_passed &= pass;
+            hprintln!(
+                "selfcheck ekf: {} max relative difference to host {:e} (tolerance {:e}); state [{}, {}, {}, {}] host [{}, {}, {}, {}]; mean NIS {} NEES {}",
+                if pass { "PASS" } else { "FAIL" },
+                diff,
+                TOLERANCE,
+                report.state[0],
+                report.state[1],
+                report.state[2],
+                report.state[3],
+                EXPECTED.state[0],
+                EXPECTED.state[1],
+                EXPECTED.state[2],
+                EXPECTED.state[3],
+                report.mean_nis,
+                report.mean_nees
+            );
+        }
+        Err(e) => {
+            all_passed = false;
+            hprintln!("selfcheck ekf: FAIL self-test returned {:?}", e);
+        }
+    }
+
+    budget::run_all();
+
+    if all_passed {
+        hprintln!("selfcheck: all PASS");
+        debug::exit(debug::EXIT_SUCCESS);
+    } else {
+        hprintln!("selfcheck: FAILED");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    hprintln!("HardFault at pc {:#010x}", frame.pc());
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("panic: {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
