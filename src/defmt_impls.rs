@@ -10,7 +10,7 @@ impl<const N: usize> Format for Ekf<N, f32> {
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
-            "Ekf {{ x: {=[f32]}, P (column-major): {=[f32]} }}",
+            "Ekf {{ x: {=[?]}, P (column-major): {=[?]} }}",
             self.state().as_slice(),
             self.covariance().as_slice()
         );
@@ -21,7 +21,7 @@ impl<const M: usize> Format for UpdateReport<M, f32> {
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
-            "UpdateReport {{ innovation: {=[f32]}, nis: {=f32}, accepted: {=bool} }}",
+            "UpdateReport {{ innovation: {=[?]}, nis: {=f32}, accepted: {=bool} }}",
             self.innovation.as_slice(),
             self.nis,
             self.accepted
@@ -33,7 +33,7 @@ impl<const M: usize> Format for SequentialUpdateReport<M, f32> {
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
-            "SequentialUpdateReport {{ nis: {=[f32]}, accepted_mask: {=u32:#b} }}",
+            "SequentialUpdateReport {{ nis: {=[?]}, accepted_mask: {=u32:#b} }}",
             self.nis.as_slice(),
             self.accepted_mask
         );
