@@ -192,13 +192,7 @@ impl<const N: usize, T: Real> Ekf<N, T> {
             return Err(FilterError::InvalidCovariance);
         }
         // P⁻ = F P Fᵀ + Q
-        let p = self.hygiene(f * self.p * f.transpose() + q);
-        if !all_finite(&p) {
-            return Err(FilterError::Numerical);
-        }
-        self.x = *x_pred;
-        self.p = p;
-        Ok(())
+        self.commit(*x_pred, self.hygiene(f * self.p * f.transpose() + q))
     }
 
     /// Vector measurement update with innovation `y = z − h(x̂)`, Jacobian `H = ∂h/∂x` and
@@ -234,13 +228,7 @@ impl<const N: usize, T: Real> Ekf<N, T> {
         }
         // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ, S symmetric
         let k = chol.solve(&ph_t.transpose()).transpose();
-        let x = self.x + k * y;
-        let p = self.joseph(&k, h, &(k * r * k.transpose()));
-        if !all_finite(&x) || !all_finite(&p) {
-            return Err(FilterError::Numerical);
-        }
-        self.x = x;
-        self.p = p;
+        self.commit(self.x + k * y, self.joseph(&k, h, &(k * r * k.transpose())))?;
         report.accepted = true;
         Ok(report)
     }
@@ -281,13 +269,7 @@ impl<const N: usize, T: Real> Ekf<N, T> {
             return Ok(report);
         }
         let k = ph_t / s; // K = P hᵀ / s
-        let x = self.x + k * y;
-        let p = self.joseph(&k, h, &(k * k.transpose() * r));
-        if !all_finite(&x) || !all_finite(&p) {
-            return Err(FilterError::Numerical);
-        }
-        self.x = x;
-        self.p = p;
+        self.commit(self.x + k * y, self.joseph(&k, h, &(k * k.transpose() * r)))?;
         report.accepted = true;
         Ok(report)
     }
@@ -363,6 +345,16 @@ impl<const N: usize, T: Real> Ekf<N, T> {
         let e = self.x - truth;
         let chol = Cholesky::new(self.p).ok_or(FilterError::InvalidCovariance)?;
         Ok(e.dot(&chol.solve(&e)))
+    }
+
+    /// Stores a new estimate if it is finite; otherwise leaves the filter as it was.
+    fn commit(&mut self, x: SVector<T, N>, p: SMatrix<T, N, N>) -> Result<(), FilterError> {
+        if !all_finite(&x) || !all_finite(&p) {
+            return Err(FilterError::Numerical);
+        }
+        self.x = x;
+        self.p = p;
+        Ok(())
     }
 
     /// Joseph form `(I − K H) P (I − K H)ᵀ + K R Kᵀ` (the last term passed in), then hygiene.
