@@ -3,5 +3,13 @@
 //! The truth is always computed in f64 and with its own code paths, so that what the f32
 //! estimators of the core are compared against is not limited by f32 or shares their
 //! approximations.
+//!
+//! * [`kinematics`]: attitude kinematics of a rigid body.
+//! * [`orbit`]: LEO orbit (Kepler + secular J2), ECI/ECEF, the local orbital frame.
+//! * [`attitude`]: attitude histories (nadir pointing with tumble, detumbling body).
+//! * [`gyro`]: a MEMS gyro triad with paper 001's error model and quantized output.
 
+pub mod attitude;
+pub mod gyro;
 pub mod kinematics;
+pub mod orbit;
