@@ -364,7 +364,13 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         if !(best.cost <= gate) {
             return Err(AmbiguityError::ModelRejected);
         }
-        if !(ratio >= cfg.ratio_threshold) {
+        // Ambiguous when a second candidate was found below `threshold × best`. (When none was
+        // found, `second_cost` is the search bound, at least `threshold × best` up to rounding.)
+        let rival = outcome
+            .best
+            .get(1)
+            .is_some_and(|c| c.cost < best.cost * cfg.ratio_threshold);
+        if rival || !ratio.is_finite() {
             return Err(AmbiguityError::Ambiguous);
         }
 
