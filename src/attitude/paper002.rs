@@ -12,6 +12,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::geometry::is_rotation;
 use crate::{real, Real, SnapshotError};
 
 use super::eigen::symmetric_eigen;
@@ -28,7 +29,8 @@ use super::range_model::{Baselines, RangeDifferences};
 /// `det G / (tr G / 3)³ < 1e-5`; [`SnapshotError::TooFewSatellites`] for fewer than 3
 /// satellites; [`SnapshotError::CoplanarLineOfSight`] when `Q` is (near) singular;
 /// [`SnapshotError::Reflection`] when `det Q < 0`; [`SnapshotError::NotConverged`] if the
-/// eigen-decomposition reaches its bound.
+/// eigen-decomposition reaches its bound; [`SnapshotError::Numerical`] when the result is not
+/// orthonormal to `512 ε` (an ill-conditioned `Q`).
 pub fn paper_formula<const M: usize, const N: usize, T: Real>(
     baselines: &Baselines<M, T>,
     obs: &RangeDifferences<M, N, T>,
@@ -82,7 +84,9 @@ pub fn paper_formula<const M: usize, const N: usize, T: Real>(
     );
     let root_inv = v * Matrix3::from_diagonal(&inv_sqrt) * v.transpose();
     let a = q.transpose() * root_inv; // eq. (16): A = Qᵀ (QQᵀ)^{-1/2}, reference → body
-    if !a.iter().all(|x| x.is_finite()) {
+    // With an ill-conditioned Q the eigen route loses orthonormality (∝ cond(QQᵀ) ε): refuse
+    // rather than return a matrix that is not a rotation to rounding.
+    if !is_rotation(&a, T::default_epsilon() * real(512.0)) {
         return Err(SnapshotError::Numerical);
     }
     Ok(a.transpose())

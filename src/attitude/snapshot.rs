@@ -148,7 +148,17 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         obs: &RangeDifferences<M, N, T>,
     ) -> Result<SnapshotSolution<T>, SnapshotError> {
         let sats = obs.satellites();
-        let weight = |sigma: T| T::one() / (sigma * sigma);
+        // Weights relative to the most precise satellite, so that N and H stay in range in f32
+        // whatever the units of σ; the absolute scale σ_min² returns in the covariance and χ².
+        let sigma_min = sats
+            .iter()
+            .map(|s| s.sigma)
+            .fold(T::max_value().unwrap_or(T::one()), |a, b| if b < a { b } else { a });
+        let scale = sigma_min * sigma_min;
+        let weight = |sigma: T| {
+            let r = sigma_min / sigma;
+            r * r
+        };
         let (info, info_inv) = los_normal_matrix(sats.iter().map(|s| (s.los, weight(s.sigma))))?;
         // Step 1: a_i = (S W Sᵀ)⁻¹ S W r_i
         let mut a = [Vector3::<T>::zeros(); M];
@@ -161,8 +171,11 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             }
             *ai = info_inv * rhs;
         }
-        // Steps 2–4
-        let fit = self.fit_reference_baselines(&a, &info)?;
+        // Steps 2–4 in the baseline domain (the start), then step 4 on the ranges themselves:
+        // in f32 the LS baselines a_i inherit cond(N) ε of rounding with a poor sky, the range
+        // residuals do not.
+        let start = self.fit_reference_baselines(&a, &info)?;
+        let fit = self.range_gauss_newton(start.q_rb, sats, &weight)?;
         let c_rb = fit.q_rb.to_dcm();
         // Residuals of eq. (4), weighted by (σ_j² Σ_B)⁻¹
         let w_b = self.correlation.inverse();
@@ -183,12 +196,13 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             }
             chi_square += q * weight(s.sigma);
         }
+        chi_square /= scale;
         let count = M * sats.len();
         let residual_rms = (sum_sq / real(count as f64)).sqrt();
         let covariance = fit
             .hessian
             .cholesky()
-            .map(|c| c.inverse())
+            .map(|c| c.inverse() * scale)
             .ok_or(SnapshotError::Numerical)?;
         let dof = count.saturating_sub(3);
         let gate = chi_square_quantile(dof, GateConfidence::P999).unwrap_or(f64::INFINITY);
@@ -276,6 +290,72 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         Ok(BaselineFit {
             q_rb: q.canonical(),
             cost,
+            hessian,
+            iterations,
+            converged,
+        })
+    }
+
+    /// Gauss–Newton on cost (4) in the range domain: rows `h_ij = b_i × (C_rbᵀ s_j)`,
+    /// `H = Σ_j w_j Σ_ik W_ik h_ij h_kjᵀ`, `g = Σ_j w_j Σ_ik W_ik h_ij e_kj`, `δ = H⁻¹ g`,
+    /// `C ← C exp([δ]×)`; at most [`GAUSS_NEWTON_MAX_ITERATIONS`] iterations.
+    fn range_gauss_newton(
+        &self,
+        start: Quaternion<T>,
+        sats: &[super::range_model::SatelliteRanges<M, T>],
+        weight: &impl Fn(T) -> T,
+    ) -> Result<BaselineFit<T>, SnapshotError> {
+        let w = self.correlation.inverse();
+        let b = self.baselines.as_array();
+        let mut q = start;
+        let mut iterations = 0u8;
+        let mut converged = false;
+        let tolerance = T::default_epsilon() * real(64.0);
+        let mut hessian = Matrix3::zeros();
+        for pass in 0..=GAUSS_NEWTON_MAX_ITERATIONS {
+            let c = q.to_dcm();
+            let mut h = Matrix3::<T>::zeros();
+            let mut g = Vector3::<T>::zeros();
+            for s in sats {
+                let u = c.transpose() * s.los;
+                let wj = weight(s.sigma);
+                let rows: [Vector3<T>; M] = core::array::from_fn(|i| b[i].cross(&u));
+                let mut e = [T::zero(); M];
+                for ((ei, bi), &r) in e.iter_mut().zip(b.iter()).zip(s.range_diff.iter()) {
+                    *ei = r - bi.dot(&u);
+                }
+                for (i, hi) in rows.iter().enumerate() {
+                    for (k, hk) in rows.iter().enumerate() {
+                        let wik = w[(i, k)] * wj;
+                        h += hi * hk.transpose() * wik;
+                        g += hi * (e[k] * wik);
+                    }
+                }
+            }
+            hessian = h;
+            let chol = h.cholesky().ok_or(SnapshotError::Numerical)?;
+            let delta = chol.solve(&g);
+            if !delta.iter().all(|v| v.is_finite()) {
+                return Err(SnapshotError::Numerical);
+            }
+            if delta.norm() <= tolerance
+                || delta.norm_squared() <= chol.inverse().trace() * real(1e-6)
+            {
+                // the step is below rounding or far below the attitude uncertainty
+                converged = true;
+                break;
+            }
+            if pass == GAUSS_NEWTON_MAX_ITERATIONS {
+                break;
+            }
+            q = (q * Quaternion::from_rotation_vector(&delta))
+                .normalize()
+                .map_err(|_| SnapshotError::Numerical)?;
+            iterations += 1;
+        }
+        Ok(BaselineFit {
+            q_rb: q.canonical(),
+            cost: T::zero(),
             hessian,
             iterations,
             converged,
