@@ -212,7 +212,9 @@ impl fmt::Display for SnapshotError {
             Self::InvalidNoise => "noise, cofactor or wavelength is not positive",
             Self::ZeroBaseline => "baseline of zero length",
             Self::CollinearBaselines => "baselines are collinear",
-            Self::CoplanarBaselines => "baselines are coplanar (paper formula needs 3 non-coplanar)",
+            Self::CoplanarBaselines => {
+                "baselines are coplanar (paper formula needs 3 non-coplanar)"
+            }
             Self::TooFewBaselines => "too few baselines",
             Self::InvalidCorrelation => "baseline correlation is not positive definite",
             Self::Reflection => "paper formula (16) gives a reflection (det Q < 0)",

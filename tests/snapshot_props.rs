@@ -2,9 +2,13 @@
 //! solver never returns a reflection or a NaN, and no input (NaN, infinities, garbage phases)
 //! makes any entry point panic.
 
-use gnss_attitude::attitude::ambiguity::{AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite};
+use gnss_attitude::attitude::ambiguity::{
+    AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite,
+};
 use gnss_attitude::attitude::paper002::paper_formula;
-use gnss_attitude::attitude::range_model::{BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges};
+use gnss_attitude::attitude::range_model::{
+    BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges,
+};
 use gnss_attitude::attitude::snapshot::SnapshotSolver;
 use gnss_attitude::attitude::wahba::{solve_wahba, WahbaPair};
 use gnss_attitude::geometry::{rot_x, rot_y, rot_z, rotation_angle};

@@ -203,9 +203,17 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     /// # Errors
     /// [`SnapshotError::NonFinite`] or [`SnapshotError::InvalidNoise`] for a non-positive
     /// wavelength, noise level, or a ratio threshold `< 1`.
-    pub fn new(solver: SnapshotSolver<M, T>, config: AmbiguityConfig<T>) -> Result<Self, SnapshotError> {
+    pub fn new(
+        solver: SnapshotSolver<M, T>,
+        config: AmbiguityConfig<T>,
+    ) -> Result<Self, SnapshotError> {
         let c = &config;
-        let values = [c.wavelength_m, c.phase_sigma_m, c.code_sigma_m, c.ratio_threshold];
+        let values = [
+            c.wavelength_m,
+            c.phase_sigma_m,
+            c.code_sigma_m,
+            c.ratio_threshold,
+        ];
         if !values.iter().all(|v| v.is_finite()) {
             return Err(SnapshotError::NonFinite);
         }
@@ -234,8 +242,10 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         &self,
         obs: &PhaseObservations<M, N, T>,
     ) -> Result<AmbiguityFix<M, N, T>, AmbiguityError> {
-        let sats = obs.satellites();
-        let n = sats.len();
+        // (n ≤ N holds by construction; the clamp lets the compiler see it, so that indexing
+        // by satellite cannot panic.)
+        let n = obs.satellites().len().min(N);
+        let sats = obs.satellites().get(..n).unwrap_or(&[]);
         let cfg = &self.config;
         let lambda = cfg.wavelength_m;
         let (var_phi, var_code) = (
@@ -244,7 +254,8 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         );
         let (k_phi, k_code) = (T::one() / var_phi, T::one() / var_code);
         let kappa = k_phi + k_code;
-        let (info, info_inv) = los_normal_matrix(sats.iter().map(|s| (s.los, T::one() / s.cofactor)))?;
+        let (info, info_inv) =
+            los_normal_matrix(sats.iter().map(|s| (s.los, T::one() / s.cofactor)))?;
 
         // 1. Float solution: â_i = N⁻¹ S W p_i ; ẑ_ij = φ_ij − s_j·â_i / λ, shifted by round(ẑ)
         let mut shift = [[T::zero(); N]; M];
@@ -258,6 +269,9 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
             let a_code = info_inv * rhs;
             let mut rhs_fixed = Vector3::zeros();
             for (j, s) in sats.iter().enumerate() {
+                if j >= N {
+                    break;
+                }
                 let zf = s.phase_cycles[i] - s.los.dot(&a_code) / lambda;
                 let sh = zf.round();
                 shift[i][j] = sh;
@@ -271,8 +285,8 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         // Q₁ = (σ_φ² W⁻¹ + σ_p² Sᵀ N⁻¹ S) / λ²
         let mut q1 = SMatrix::<T, N, N>::identity();
         let l2 = lambda * lambda;
-        for (j, sj) in sats.iter().enumerate() {
-            for (l, sl) in sats.iter().enumerate() {
+        for (j, sj) in sats.iter().enumerate().take(N) {
+            for (l, sl) in sats.iter().enumerate().take(N) {
                 let mut v = var_code * sj.los.dot(&(info_inv * sl.los));
                 if j == l {
                     v += var_phi * sj.cofactor;
@@ -296,15 +310,15 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         let mut t_a = [Vector3::<T>::zeros(); N];
         for (c, col) in t_a.iter_mut().enumerate().take(n) {
             let mut v = Vector3::zeros();
-            for (j, s) in sats.iter().enumerate() {
+            for (j, s) in sats.iter().enumerate().take(N) {
                 v += s.los * (dec.z_inv_t[(j, c)] / s.cofactor);
             }
             *col = info_inv * v * (lambda * k_phi / kappa);
         }
         let conditional = |i: usize, z: &[T; N]| -> Vector3<T> {
-            let mut a = a_shift[i];
-            for c in 0..n {
-                a -= t_a[c] * z[c];
+            let mut a = a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
+            for (t, &zc) in t_a.iter().zip(z.iter()).take(n) {
+                a -= t * zc;
             }
             a
         };
@@ -334,16 +348,21 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                     if !constrained {
                         return T::zero();
                     }
-                    let d = conditional(i, z).norm() - lengths[i];
-                    d * d / (sigma_b[(i, i)] * length_var)
+                    let (Some(&length), Some(&var_i)) =
+                        (lengths.get(i), sigma_b.as_slice().get(i * (M + 1)))
+                    else {
+                        return T::zero();
+                    };
+                    let d = conditional(i, z).norm() - length;
+                    d * d / (var_i * length_var)
                 },
                 |z| {
                     if !constrained {
                         return Some(T::zero());
                     }
                     let mut a = [Vector3::zeros(); M];
-                    for (i, ai) in a.iter_mut().enumerate() {
-                        *ai = conditional(i, &z[i]);
+                    for (i, (ai, zi)) in a.iter_mut().zip(z.iter()).enumerate() {
+                        *ai = conditional(i, zi);
                     }
                     self.solver
                         .fit_reference_baselines(&a, &fit_info)
@@ -379,6 +398,9 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         let mut ranges = RangeDifferences::<M, N, T>::new();
         let sigma_fixed = |c: T| (c / kappa).sqrt();
         for (j, s) in sats.iter().enumerate() {
+            if j >= N {
+                break;
+            }
             let mut range_diff = [T::zero(); M];
             for i in 0..M {
                 let mut zij = shift[i][j];
@@ -386,7 +408,8 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                     zij += dec.z_inv_t[(j, c)] * best.z[i][c];
                 }
                 ambiguities[i][j] = to_i32(zij);
-                range_diff[i] = (k_phi * lambda * (s.phase_cycles[i] - zij) + k_code * s.code_m[i]) / kappa;
+                range_diff[i] =
+                    (k_phi * lambda * (s.phase_cycles[i] - zij) + k_code * s.code_m[i]) / kappa;
             }
             ranges.push(SatelliteRanges {
                 id: s.id,

@@ -181,8 +181,12 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
         zbar: &mut [[T; N]; M],
         zint: &[[T; N]; M],
     ) {
-        let n = self.dec.n;
-        let (i, k) = (g / n, n - 1 - g % n);
+        // (the clamps and `get`s let the compiler see every index in range: no panic path)
+        let n = self.dec.n.min(N);
+        if n == 0 {
+            return;
+        }
+        let (i, k) = ((g / n).min(M - 1), (n - 1 - g % n).min(N - 1));
         if k == n - 1 {
             // conditional float of baseline i given the integers of baselines < i
             for c in 0..n {
@@ -200,7 +204,7 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
                 lv[i - 1][0].after
             }
         } else {
-            lv[i][k + 1].after
+            lv[i][(k + 1).min(N - 1)].after
         };
         // cond = ẑ'_k − Σ_{l>k} L_lk (cond_l − z_l)
         let mut cond = zbar[i][k];
@@ -226,8 +230,11 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
 
     /// Next integer at level `g` in Schnorr–Euchner order (z, z ± 1, z ∓ 1, z ± 2, …).
     fn advance(&self, g: usize, lv: &mut [[Level<T>; N]; M]) {
-        let n = self.dec.n;
-        let (i, k) = (g / n, n - 1 - g % n);
+        let n = self.dec.n.min(N);
+        if n == 0 {
+            return;
+        }
+        let (i, k) = ((g / n).min(M - 1), (n - 1 - g % n).min(N - 1));
         let var = self.d_b[i] * self.dec.d[k];
         let level = &mut lv[i][k];
         level.z += level.step;

@@ -49,11 +49,18 @@ pub fn decorrelate<const N: usize, T: Real>(
     if !q.iter().all(|v| v.is_finite()) {
         return Err(SnapshotError::NonFinite);
     }
+    let n = n.min(N); // (lets the compiler see the indices in range)
     let (mut l, mut d) = ltdl(q, n)?;
     let mut z = SMatrix::<T, N, N>::identity();
     let mut z_inv_t = SMatrix::<T, N, N>::identity();
     if n < 2 {
-        return Ok(Decorrelation { n, l, d, z, z_inv_t });
+        return Ok(Decorrelation {
+            n,
+            l,
+            d,
+            z,
+            z_inv_t,
+        });
     }
     // Integer entries must stay exact in T (2^22 leaves margin in f32).
     let limit: T = real(4_194_304.0);
@@ -68,43 +75,60 @@ pub fn decorrelate<const N: usize, T: Real>(
         if k <= k1 {
             for i in (k + 1)..n {
                 // integer Gauss transformation: L(i:n, k) −= μ L(i:n, i), Z(:, k) −= μ Z(:, i)
-                let mu = l[(i, k)].round();
+                let mu = at(&l, i, k).round();
                 if mu != T::zero() {
                     for r in i..n {
-                        l[(r, k)] = l[(r, k)] - mu * l[(r, i)];
+                        let v = at(&l, r, k) - mu * at(&l, r, i);
+                        set(&mut l, r, k, v);
                     }
                     for r in 0..n {
-                        z[(r, k)] = z[(r, k)] - mu * z[(r, i)];
-                        z_inv_t[(r, i)] = z_inv_t[(r, i)] + mu * z_inv_t[(r, k)];
-                        if !(z[(r, k)].abs() < limit && z_inv_t[(r, i)].abs() < limit) {
+                        let zk = at(&z, r, k) - mu * at(&z, r, i);
+                        let zi = at(&z_inv_t, r, i) + mu * at(&z_inv_t, r, k);
+                        set(&mut z, r, k, zk);
+                        set(&mut z_inv_t, r, i, zi);
+                        if !(zk.abs() < limit && zi.abs() < limit) {
                             break 'outer;
                         }
                     }
                 }
             }
         }
-        let lk = l[(k + 1, k)];
-        let del = d[k] + lk * lk * d[k + 1];
+        let lk = at(&l, k + 1, k);
+        let (dk, dk1) = (get(&d, k), get(&d, k + 1));
+        let del = dk + lk * lk * dk1;
         // swap k and k+1 when it lowers the conditional variance at k+1 (by more than rounding)
-        if del < d[k + 1] * (T::one() - T::default_epsilon() * real(64.0)) {
-            let eta = d[k] / del;
-            let lam = d[k + 1] * lk / del;
-            d[k] = eta * d[k + 1];
-            d[k + 1] = del;
+        if del < dk1 * (T::one() - T::default_epsilon() * real(64.0)) {
+            let eta = dk / del;
+            let lam = dk1 * lk / del;
+            if let Some(x) = d.get_mut(k) {
+                *x = eta * dk1;
+            }
+            if let Some(x) = d.get_mut(k + 1) {
+                *x = del;
+            }
             for c in 0..k {
-                let a0 = l[(k, c)];
-                let a1 = l[(k + 1, c)];
-                l[(k, c)] = -lk * a0 + a1;
-                l[(k + 1, c)] = eta * a0 + lam * a1;
+                let a0 = at(&l, k, c);
+                let a1 = at(&l, k + 1, c);
+                set(&mut l, k, c, -lk * a0 + a1);
+                set(&mut l, k + 1, c, eta * a0 + lam * a1);
             }
-            l[(k + 1, k)] = lam;
+            set(&mut l, k + 1, k, lam);
             for r in (k + 2)..n {
-                let t = l[(r, k)];
-                l[(r, k)] = l[(r, k + 1)];
-                l[(r, k + 1)] = t;
+                let t = at(&l, r, k);
+                let u = at(&l, r, k + 1);
+                set(&mut l, r, k, u);
+                set(&mut l, r, k + 1, t);
             }
-            z.swap_columns(k, k + 1);
-            z_inv_t.swap_columns(k, k + 1);
+            for r in 0..n {
+                let t = at(&z, r, k);
+                let u = at(&z, r, k + 1);
+                set(&mut z, r, k, u);
+                set(&mut z, r, k + 1, t);
+                let t = at(&z_inv_t, r, k);
+                let u = at(&z_inv_t, r, k + 1);
+                set(&mut z_inv_t, r, k, u);
+                set(&mut z_inv_t, r, k + 1, t);
+            }
             k1 = k;
             k = n - 2;
         } else if k == 0 {
@@ -116,7 +140,31 @@ pub fn decorrelate<const N: usize, T: Real>(
     if !(l.iter().all(|v| v.is_finite()) && d.iter().all(|v| v.is_finite())) {
         return Err(SnapshotError::Numerical);
     }
-    Ok(Decorrelation { n, l, d, z, z_inv_t })
+    Ok(Decorrelation {
+        n,
+        l,
+        d,
+        z,
+        z_inv_t,
+    })
+}
+
+/// Checked element read (0 outside the matrix; indices are in range by construction, the
+/// check only keeps panics out of the compiled code).
+fn at<T: Real, const N: usize>(m: &SMatrix<T, N, N>, i: usize, j: usize) -> T {
+    m.get((i, j)).copied().unwrap_or_else(T::zero)
+}
+
+/// Checked element write (ignored outside the matrix).
+fn set<T: Real, const N: usize>(m: &mut SMatrix<T, N, N>, i: usize, j: usize, v: T) {
+    if let Some(x) = m.get_mut((i, j)) {
+        *x = v;
+    }
+}
+
+/// Checked vector read.
+fn get<T: Real, const N: usize>(v: &SVector<T, N>, i: usize) -> T {
+    v.get(i).copied().unwrap_or_else(T::zero)
 }
 
 /// `Q = Lᵀ D L` for the leading `n × n` block (eliminating from the last index).
@@ -124,6 +172,7 @@ fn ltdl<const N: usize, T: Real>(
     q: &SMatrix<T, N, N>,
     n: usize,
 ) -> Result<(SMatrix<T, N, N>, SVector<T, N>), SnapshotError> {
+    let n = n.min(N); // (lets the compiler see the indices in range)
     let mut a = *q;
     let mut l = SMatrix::<T, N, N>::identity();
     let mut d = SVector::<T, N>::from_element(T::one());
@@ -171,7 +220,11 @@ mod tests {
         let dec = decorrelate(&q, 5).unwrap();
         let lhs = dec.z.transpose() * q * dec.z;
         let rhs = dec.l.transpose() * SMatrix::from_diagonal(&dec.d) * dec.l;
-        assert!((lhs - rhs).norm() < 1e-9 * q.norm(), "{}", (lhs - rhs).norm());
+        assert!(
+            (lhs - rhs).norm() < 1e-9 * q.norm(),
+            "{}",
+            (lhs - rhs).norm()
+        );
         assert!((dec.z.determinant().abs() - 1.0).abs() < 1e-9);
         assert!(dec.z.iter().all(|v| v.fract() == 0.0));
         assert!((dec.z_inv_t.transpose() * dec.z - SMatrix::<f64, 5, 5>::identity()).norm() < 1e-9);

@@ -13,6 +13,7 @@
 //!   single-difference carrier phase and code, constrained by the known baselines (the
 //!   multivariate constrained idea of MC-LAMBDA), validated by a ratio test, refusing rather
 //!   than returning a wrong fix.
+//! * [`example`]: a deterministic example epoch (docs, benchmarks, firmware budgets).
 //!
 //! Frames: `C_rb` is the attitude (body to reference); paper 002's `A` is `C_br = C_rbᵀ`.
 //! Lines of sight `s_j` are unit vectors from the antennas to satellite `j` in the reference
@@ -21,6 +22,7 @@
 
 pub mod ambiguity;
 pub mod eigen;
+pub mod example;
 mod integer_search;
 pub mod lambda;
 pub mod paper002;

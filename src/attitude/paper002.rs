@@ -84,8 +84,8 @@ pub fn paper_formula<const M: usize, const N: usize, T: Real>(
     );
     let root_inv = v * Matrix3::from_diagonal(&inv_sqrt) * v.transpose();
     let a = q.transpose() * root_inv; // eq. (16): A = Qᵀ (QQᵀ)^{-1/2}, reference → body
-    // With an ill-conditioned Q the eigen route loses orthonormality (∝ cond(QQᵀ) ε): refuse
-    // rather than return a matrix that is not a rotation to rounding.
+                                      // With an ill-conditioned Q the eigen route loses orthonormality (∝ cond(QQᵀ) ε): refuse
+                                      // rather than return a matrix that is not a rotation to rounding.
     if !is_rotation(&a, T::default_epsilon() * real(512.0)) {
         return Err(SnapshotError::Numerical);
     }

@@ -150,10 +150,16 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         let sats = obs.satellites();
         // Weights relative to the most precise satellite, so that N and H stay in range in f32
         // whatever the units of σ; the absolute scale σ_min² returns in the covariance and χ².
-        let sigma_min = sats
-            .iter()
-            .map(|s| s.sigma)
-            .fold(T::max_value().unwrap_or(T::one()), |a, b| if b < a { b } else { a });
+        let sigma_min =
+            sats.iter()
+                .map(|s| s.sigma)
+                .fold(T::max_value().unwrap_or(T::one()), |a, b| {
+                    if b < a {
+                        b
+                    } else {
+                        a
+                    }
+                });
         let scale = sigma_min * sigma_min;
         let weight = |sigma: T| {
             let r = sigma_min / sigma;

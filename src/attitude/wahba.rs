@@ -117,7 +117,8 @@ impl<T: Real> WahbaProblem<T> {
         k.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(s - Matrix3::identity() * sigma));
         k.fixed_view_mut::<3, 1>(0, 3).copy_from(&self.z);
-        k.fixed_view_mut::<1, 3>(3, 0).copy_from(&self.z.transpose());
+        k.fixed_view_mut::<1, 3>(3, 0)
+            .copy_from(&self.z.transpose());
         k[(3, 3)] = sigma;
         if !k.iter().all(|v| v.is_finite()) {
             return Err(SnapshotError::NonFinite);
@@ -184,7 +185,10 @@ mod tests {
     fn rank_two_profile_matrix_is_solved_exactly_in_f32_at_180_degrees() {
         // Two baselines of the paper's triangle, heading 180°: B has rank 2.
         let c = rot_z(core::f64::consts::PI);
-        let body = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.5, 0.75f64.sqrt(), 0.0)];
+        let body = [
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.5, 0.75f64.sqrt(), 0.0),
+        ];
         let pairs = pairs_for(&c, &body, &[1.0, 1.0]);
         let f64_sol = solve_wahba(&pairs).unwrap();
         assert!(rotation_angle(&(f64_sol.q_rb.to_dcm().transpose() * c)) < 1e-12);

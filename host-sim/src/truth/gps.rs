@@ -311,7 +311,11 @@ mod tests {
             let (p, v) = e.position_velocity(t);
             let a = e.sqrt_a * e.sqrt_a;
             assert!((a - 26_560e3).abs() < 5e3);
-            assert!((p.norm() - a).abs() <= a * e.eccentricity + 1.0, "radius {}", p.norm());
+            assert!(
+                (p.norm() - a).abs() <= a * e.eccentricity + 1.0,
+                "radius {}",
+                p.norm()
+            );
             let h = 0.5;
             let (p1, _) = e.position_velocity(t + h);
             let (p0, _) = e.position_velocity(t - h);

@@ -19,8 +19,8 @@
 //! comparison methods; search effort (`nodes_mean`, `nodes_max`, `candidates_mean`).
 
 use gnss_attitude::attitude::ambiguity::{
-    AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite,
-    SearchMode, GPS_L1_WAVELENGTH_M,
+    AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite, SearchMode,
+    GPS_L1_WAVELENGTH_M,
 };
 use gnss_attitude::attitude::range_model::{
     BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges,
@@ -158,7 +158,9 @@ fn one_epoch(
     };
     // float-then-round (host f64): code-only float baseline per baseline, round, solve
     let los: Vec<Vector3<f64>> = views.iter().map(|v| v.los_ned).collect();
-    let nmat = los.iter().fold(Matrix3::zeros(), |m, s| m + s * s.transpose());
+    let nmat = los
+        .iter()
+        .fold(Matrix3::zeros(), |m, s| m + s * s.transpose());
     let ninv = nmat
         .try_inverse()
         .ok_or_else(|| anyhow::anyhow!("singular sky"))?;
@@ -205,8 +207,14 @@ fn one_epoch(
 /// Success, wrong-fix and refusal rates and the RMS error of fixed epochs.
 fn rates(verdicts: &[Verdict]) -> (f64, f64, f64, f64) {
     let total = verdicts.len().max(1) as f64;
-    let correct = verdicts.iter().filter(|v| matches!(v, Verdict::Correct(_))).count() as f64;
-    let wrong = verdicts.iter().filter(|v| matches!(v, Verdict::Wrong(_))).count() as f64;
+    let correct = verdicts
+        .iter()
+        .filter(|v| matches!(v, Verdict::Correct(_)))
+        .count() as f64;
+    let wrong = verdicts
+        .iter()
+        .filter(|v| matches!(v, Verdict::Wrong(_)))
+        .count() as f64;
     let errors: Vec<f64> = verdicts
         .iter()
         .filter_map(|v| match v {
@@ -231,8 +239,7 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
         Baselines::new(triangle().map(|v| v.cast::<f32>())).map_err(|e| anyhow::anyhow!("{e}"))?;
     let solver = SnapshotSolver::new(baselines, BaselineCorrelation::shared_base_antenna());
     let config = AmbiguityConfig::gps_l1(SIGMA_PHASE as f32, SIGMA_CODE as f32);
-    let constrained =
-        AmbiguityResolver::new(solver, config).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let constrained = AmbiguityResolver::new(solver, config).map_err(|e| anyhow::anyhow!("{e}"))?;
     let unconstrained = AmbiguityResolver::new(
         solver,
         AmbiguityConfig {
@@ -247,7 +254,15 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
     let results: Vec<EpochResult> = (0..EPOCHS)
         .into_par_iter()
         .map(|k| {
-            let r = one_epoch(ctx.seed, k, &almanac, &site, &constrained, &unconstrained, &round_solver);
+            let r = one_epoch(
+                ctx.seed,
+                k,
+                &almanac,
+                &site,
+                &constrained,
+                &unconstrained,
+                &round_solver,
+            );
             bar.inc(1);
             r
         })
@@ -258,10 +273,22 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
     let (s, w, r, e) = rates(&pick(|x| x.constrained));
     let (ls, lw, lr, le) = rates(&pick(|x| x.lambda));
     let (rs, rw, rr, re) = rates(&pick(|x| x.round));
-    let nodes: Vec<f64> = results.iter().filter(|x| x.nodes > 0).map(|x| f64::from(x.nodes)).collect();
-    let cands: Vec<f64> = results.iter().filter(|x| x.nodes > 0).map(|x| f64::from(x.candidates)).collect();
+    let nodes: Vec<f64> = results
+        .iter()
+        .filter(|x| x.nodes > 0)
+        .map(|x| f64::from(x.nodes))
+        .collect();
+    let cands: Vec<f64> = results
+        .iter()
+        .filter(|x| x.nodes > 0)
+        .map(|x| f64::from(x.candidates))
+        .collect();
     let sats: Vec<f64> = results.iter().map(|x| x.satellites as f64).collect();
-    let ratios: Vec<f64> = results.iter().map(|x| x.ratio).filter(|v| v.is_finite()).collect();
+    let ratios: Vec<f64> = results
+        .iter()
+        .map(|x| x.ratio)
+        .filter(|v| v.is_finite())
+        .collect();
     let count = |name: &str| {
         results
             .iter()
@@ -324,7 +351,15 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
         };
         write_csv(
             &csv,
-            &["epoch", "satellites", "constrained", "lambda", "round", "nodes", "ratio"],
+            &[
+                "epoch",
+                "satellites",
+                "constrained",
+                "lambda",
+                "round",
+                "nodes",
+                "ratio",
+            ],
             results.iter().enumerate().map(|(k, x)| {
                 [
                     k as f64,

@@ -18,7 +18,11 @@ pub fn triangle() -> [Vector3<f64>; 2] {
 /// A regular tetrahedron of 1 m edges: the triangle plus `(0.5, √3/6, √(2/3))` m.
 pub fn tetrahedron() -> [Vector3<f64>; 3] {
     let [b1, b2] = triangle();
-    [b1, b2, Vector3::new(0.5, 3f64.sqrt() / 6.0, (2.0f64 / 3.0).sqrt())]
+    [
+        b1,
+        b2,
+        Vector3::new(0.5, 3f64.sqrt() / 6.0, (2.0f64 / 3.0).sqrt()),
+    ]
 }
 
 /// Unit line of sight in a local-level frame with z to nadir (NED-like) from elevation and
@@ -31,7 +35,11 @@ pub fn los_deg(elevation: f64, azimuth: f64) -> Vector3<f64> {
 
 /// The paper's recommended sky: elevations 60/45/30°, azimuths 0/120/240°.
 pub fn paper_sky() -> [Vector3<f64>; 3] {
-    [los_deg(60.0, 0.0), los_deg(45.0, 120.0), los_deg(30.0, 240.0)]
+    [
+        los_deg(60.0, 0.0),
+        los_deg(45.0, 120.0),
+        los_deg(30.0, 240.0),
+    ]
 }
 
 /// A standard normal sample.

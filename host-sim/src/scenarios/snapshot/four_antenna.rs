@@ -74,7 +74,9 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
                 Ok(c) => {
                     let c = c.cast::<f64>();
                     level.paper_err.push(euler_errors_deg(&c, &truth));
-                    level.paper_angle.push(rotation_angle(&(c.transpose() * c_rb)).to_degrees());
+                    level
+                        .paper_angle
+                        .push(rotation_angle(&(c.transpose() * c_rb)).to_degrees());
                 }
                 Err(SnapshotError::Reflection) => level.paper_reflections += 1,
                 Err(_) => level.paper_other_failures += 1,
@@ -84,7 +86,9 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
                     let c = sol.c_rb.cast::<f64>();
                     level.general_reflections += usize::from(c.determinant() < 0.0);
                     level.general_err.push(euler_errors_deg(&c, &truth));
-                    level.general_angle.push(rotation_angle(&(c.transpose() * c_rb)).to_degrees());
+                    level
+                        .general_angle
+                        .push(rotation_angle(&(c.transpose() * c_rb)).to_degrees());
                 }
                 Err(_) => level.general_failures += 1,
             }
@@ -107,10 +111,22 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
         .metric("general_std_deg", json!(std(&fine.general_err)))
         .metric("paper_formula_reflections_4mm", fine.paper_reflections)
         .metric("paper_formula_reflections_0_3m", coarse.paper_reflections)
-        .metric("paper_formula_reflection_rate_0_3m", coarse.paper_reflections as f64 / EPOCHS as f64)
-        .metric("general_reflections", fine.general_reflections + coarse.general_reflections)
-        .metric("general_failures", fine.general_failures + coarse.general_failures)
-        .metric("paper_formula_rms_deg_0_3m", stats::rms(&coarse.paper_angle))
+        .metric(
+            "paper_formula_reflection_rate_0_3m",
+            coarse.paper_reflections as f64 / EPOCHS as f64,
+        )
+        .metric(
+            "general_reflections",
+            fine.general_reflections + coarse.general_reflections,
+        )
+        .metric(
+            "general_failures",
+            fine.general_failures + coarse.general_failures,
+        )
+        .metric(
+            "paper_formula_rms_deg_0_3m",
+            stats::rms(&coarse.paper_angle),
+        )
         .metric("general_rms_deg_0_3m", stats::rms(&coarse.general_angle))
         .metric("paper_formula_rms_deg_4mm", stats::rms(&fine.paper_angle))
         .metric("general_rms_deg_4mm", stats::rms(&fine.general_angle))

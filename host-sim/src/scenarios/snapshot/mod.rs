@@ -22,7 +22,8 @@ pub mod paper;
 /// The scenario.
 pub const SCENARIO: Scenario = Scenario {
     name: "snapshot",
-    about: "Paper 002: snapshot attitude from carrier-phase range differences, ambiguity resolution",
+    about:
+        "Paper 002: snapshot attitude from carrier-phase range differences, ambiguity resolution",
     variants: &[
         Variant {
             name: "paper",
@@ -30,7 +31,8 @@ pub const SCENARIO: Scenario = Scenario {
         },
         Variant {
             name: "ambiguity",
-            about: "real GPS sky, 6-10 sats, 3 mm / 0.3 m, unknown integers, vs LAMBDA and rounding",
+            about:
+                "real GPS sky, 6-10 sats, 3 mm / 0.3 m, unknown integers, vs LAMBDA and rounding",
         },
         Variant {
             name: "four-antenna",

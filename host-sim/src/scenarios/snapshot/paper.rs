@@ -50,7 +50,9 @@ fn pinv_paper(
     sky: &[Vector3<f64>],
     ranges: &[[f64; 2]],
 ) -> Option<(Matrix3<f64>, bool)> {
-    let g = b.iter().fold(Matrix3::zeros(), |g, bi| g + bi * bi.transpose());
+    let g = b
+        .iter()
+        .fold(Matrix3::zeros(), |g, bi| g + bi * bi.transpose());
     let g_pinv = g.pseudo_inverse(1e-9).ok()?;
     let mut q = Matrix3::zeros();
     for (s, r) in sky.iter().zip(ranges) {
@@ -205,11 +207,22 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
                             .collect(),
                         0,
                     ),
-                    Series::bound("+3 CRB", vec![(0.0, 3.0 * crb_deg[a]), (shown as f64, 3.0 * crb_deg[a])], 1),
-                    Series::bound("-3 CRB", vec![(0.0, -3.0 * crb_deg[a]), (shown as f64, -3.0 * crb_deg[a])], 1),
+                    Series::bound(
+                        "+3 CRB",
+                        vec![(0.0, 3.0 * crb_deg[a]), (shown as f64, 3.0 * crb_deg[a])],
+                        1,
+                    ),
+                    Series::bound(
+                        "-3 CRB",
+                        vec![(0.0, -3.0 * crb_deg[a]), (shown as f64, -3.0 * crb_deg[a])],
+                        1,
+                    ),
                     Series::bound(
                         "paper mean error",
-                        vec![(0.0, PAPER_MEAN_ERR_DEG[a]), (shown as f64, PAPER_MEAN_ERR_DEG[a])],
+                        vec![
+                            (0.0, PAPER_MEAN_ERR_DEG[a]),
+                            (shown as f64, PAPER_MEAN_ERR_DEG[a]),
+                        ],
                         2,
                     ),
                 ],
