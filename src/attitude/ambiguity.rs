@@ -21,7 +21,7 @@
 //!    is the GLS): `â_i = N⁻¹ S W p_i`, `ẑ_i = φ_i − Sᵀ â_i / λ`, `N = S W Sᵀ`,
 //!    `W = diag(1/c_j)`; `Cov(ẑ) = Σ_B ⊗ Q₁`, `Q₁ = (σ_φ² W⁻¹ + σ_p² Sᵀ N⁻¹ S) / λ²`.
 //! 2. **LAMBDA decorrelation** of `Q₁` ([`super::lambda`]).
-//! 3. **Constrained multivariate integer search** ([`super::integer_search`]) of
+//! 3. **Constrained multivariate integer search** (a bounded depth-first Schnorr–Euchner search) of
 //!    `min_Z F(Z) + G(Z)`, the MC-LAMBDA objective (Teunissen; Giorgi): `F` is the float
 //!    distance `‖ẑ − z‖²` in the metric of `Cov(ẑ)`, and
 //!    `G(Z) = min_{C ∈ SO(3)} Σ_ik (Σ_B⁻¹)_ik (ǎ_i − C b_i)ᵀ κN (ǎ_k − C b_k)` the misfit of
@@ -233,6 +233,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     }
 
     /// Resolves the ambiguities of one epoch and solves the attitude.
+    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
     ///
     /// # Errors
     /// [`AmbiguityError::Input`] for too few satellites or coplanar lines of sight;

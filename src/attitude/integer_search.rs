@@ -174,6 +174,7 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
     }
 
     /// Enters level `g`: conditional mean, nearest integer, first step direction, distance.
+    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
     fn enter(
         &self,
         g: usize,

@@ -188,12 +188,12 @@ fn ltdl<const N: usize, T: Real>(
         }
         for i in 0..j {
             for c in 0..=i {
-                a[(i, c)] = a[(i, c)] - l[(j, c)] * l[(j, i)];
+                a[(i, c)] -= l[(j, c)] * l[(j, i)];
             }
         }
         let ljj = l[(j, j)];
         for c in 0..=j {
-            l[(j, c)] = l[(j, c)] / ljj;
+            l[(j, c)] /= ljj;
         }
     }
     Ok((l, d))
