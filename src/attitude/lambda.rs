@@ -50,18 +50,23 @@ pub fn decorrelate<const N: usize, T: Real>(
         return Err(SnapshotError::NonFinite);
     }
     let n = n.min(N); // (lets the compiler see the indices in range)
-    let (mut l, mut d) = ltdl(q, n)?;
-    let mut z = SMatrix::<T, N, N>::identity();
-    let mut z_inv_t = SMatrix::<T, N, N>::identity();
+                      // Built in place (the caller's stack holds one copy of the matrices): `z` serves as the
+                      // factorization's workspace before it becomes the transform.
+    let mut dec = Decorrelation {
+        n,
+        l: SMatrix::identity(),
+        d: SVector::from_element(T::one()),
+        z: *q,
+        z_inv_t: SMatrix::identity(),
+    };
+    ltdl(&mut dec.z, &mut dec.l, &mut dec.d, n)?;
+    dec.z.fill_with_identity();
     if n < 2 {
-        return Ok(Decorrelation {
-            n,
-            l,
-            d,
-            z,
-            z_inv_t,
-        });
+        return Ok(dec);
     }
+    let Decorrelation {
+        l, d, z, z_inv_t, ..
+    } = &mut dec;
     // Integer entries must stay exact in T (2^22 leaves margin in f32).
     let limit: T = real(4_194_304.0);
     let mut k = n - 2;
@@ -75,17 +80,17 @@ pub fn decorrelate<const N: usize, T: Real>(
         if k <= k1 {
             for i in (k + 1)..n {
                 // integer Gauss transformation: L(i:n, k) −= μ L(i:n, i), Z(:, k) −= μ Z(:, i)
-                let mu = at(&l, i, k).round();
+                let mu = at(l, i, k).round();
                 if mu != T::zero() {
                     for r in i..n {
-                        let v = at(&l, r, k) - mu * at(&l, r, i);
-                        set(&mut l, r, k, v);
+                        let v = at(l, r, k) - mu * at(l, r, i);
+                        set(l, r, k, v);
                     }
                     for r in 0..n {
-                        let zk = at(&z, r, k) - mu * at(&z, r, i);
-                        let zi = at(&z_inv_t, r, i) + mu * at(&z_inv_t, r, k);
-                        set(&mut z, r, k, zk);
-                        set(&mut z_inv_t, r, i, zi);
+                        let zk = at(z, r, k) - mu * at(z, r, i);
+                        let zi = at(z_inv_t, r, i) + mu * at(z_inv_t, r, k);
+                        set(z, r, k, zk);
+                        set(z_inv_t, r, i, zi);
                         if !(zk.abs() < limit && zi.abs() < limit) {
                             break 'outer;
                         }
@@ -93,8 +98,8 @@ pub fn decorrelate<const N: usize, T: Real>(
                 }
             }
         }
-        let lk = at(&l, k + 1, k);
-        let (dk, dk1) = (get(&d, k), get(&d, k + 1));
+        let lk = at(l, k + 1, k);
+        let (dk, dk1) = (get(d, k), get(d, k + 1));
         let del = dk + lk * lk * dk1;
         // swap k and k+1 when it lowers the conditional variance at k+1 (by more than rounding)
         if del < dk1 * (T::one() - T::default_epsilon() * real(64.0)) {
@@ -107,27 +112,27 @@ pub fn decorrelate<const N: usize, T: Real>(
                 *x = del;
             }
             for c in 0..k {
-                let a0 = at(&l, k, c);
-                let a1 = at(&l, k + 1, c);
-                set(&mut l, k, c, -lk * a0 + a1);
-                set(&mut l, k + 1, c, eta * a0 + lam * a1);
+                let a0 = at(l, k, c);
+                let a1 = at(l, k + 1, c);
+                set(l, k, c, -lk * a0 + a1);
+                set(l, k + 1, c, eta * a0 + lam * a1);
             }
-            set(&mut l, k + 1, k, lam);
+            set(l, k + 1, k, lam);
             for r in (k + 2)..n {
-                let t = at(&l, r, k);
-                let u = at(&l, r, k + 1);
-                set(&mut l, r, k, u);
-                set(&mut l, r, k + 1, t);
+                let t = at(l, r, k);
+                let u = at(l, r, k + 1);
+                set(l, r, k, u);
+                set(l, r, k + 1, t);
             }
             for r in 0..n {
-                let t = at(&z, r, k);
-                let u = at(&z, r, k + 1);
-                set(&mut z, r, k, u);
-                set(&mut z, r, k + 1, t);
-                let t = at(&z_inv_t, r, k);
-                let u = at(&z_inv_t, r, k + 1);
-                set(&mut z_inv_t, r, k, u);
-                set(&mut z_inv_t, r, k + 1, t);
+                let t = at(z, r, k);
+                let u = at(z, r, k + 1);
+                set(z, r, k, u);
+                set(z, r, k + 1, t);
+                let t = at(z_inv_t, r, k);
+                let u = at(z_inv_t, r, k + 1);
+                set(z_inv_t, r, k, u);
+                set(z_inv_t, r, k + 1, t);
             }
             k1 = k;
             k = n - 2;
@@ -140,13 +145,7 @@ pub fn decorrelate<const N: usize, T: Real>(
     if !(l.iter().all(|v| v.is_finite()) && d.iter().all(|v| v.is_finite())) {
         return Err(SnapshotError::Numerical);
     }
-    Ok(Decorrelation {
-        n,
-        l,
-        d,
-        z,
-        z_inv_t,
-    })
+    Ok(dec)
 }
 
 /// Checked element read (0 outside the matrix; indices are in range by construction, the
@@ -169,13 +168,12 @@ fn get<T: Real, const N: usize>(v: &SVector<T, N>, i: usize) -> T {
 
 /// `Q = Lᵀ D L` for the leading `n × n` block (eliminating from the last index).
 fn ltdl<const N: usize, T: Real>(
-    q: &SMatrix<T, N, N>,
+    a: &mut SMatrix<T, N, N>,
+    l: &mut SMatrix<T, N, N>,
+    d: &mut SVector<T, N>,
     n: usize,
-) -> Result<(SMatrix<T, N, N>, SVector<T, N>), SnapshotError> {
+) -> Result<(), SnapshotError> {
     let n = n.min(N); // (lets the compiler see the indices in range)
-    let mut a = *q;
-    let mut l = SMatrix::<T, N, N>::identity();
-    let mut d = SVector::<T, N>::from_element(T::one());
     for j in (0..n).rev() {
         let djj = a[(j, j)];
         if !(djj > T::zero()) {
@@ -196,7 +194,7 @@ fn ltdl<const N: usize, T: Real>(
             l[(j, c)] /= ljj;
         }
     }
-    Ok((l, d))
+    Ok(())
 }
 
 #[cfg(test)]
