@@ -181,7 +181,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         // in f32 the LS baselines a_i inherit cond(N) ε of rounding with a poor sky, the range
         // residuals do not.
         let start = self.fit_reference_baselines(&a, &info)?;
-        let fit = self.range_gauss_newton(start.q_rb, sats, &weight)?;
+        let fit = self.range_gauss_newton(start.q_rb, sats, &weight, scale)?;
         let c_rb = fit.q_rb.to_dcm();
         // Residuals of eq. (4), weighted by (σ_j² Σ_B)⁻¹
         let w_b = self.correlation.inverse();
@@ -310,15 +310,16 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         start: Quaternion<T>,
         sats: &[super::range_model::SatelliteRanges<M, T>],
         weight: &impl Fn(T) -> T,
+        scale: T,
     ) -> Result<BaselineFit<T>, SnapshotError> {
         let w = self.correlation.inverse();
         let b = self.baselines.as_array();
         let mut q = start;
         let mut iterations = 0u8;
         let mut converged = false;
-        let tolerance = T::default_epsilon() * real(64.0);
+        let tolerance = T::default_epsilon() * real(4.0);
         let mut hessian = Matrix3::zeros();
-        for pass in 0..=GAUSS_NEWTON_MAX_ITERATIONS {
+        for _ in 0..GAUSS_NEWTON_MAX_ITERATIONS {
             let c = q.to_dcm();
             let mut h = Matrix3::<T>::zeros();
             let mut g = Vector3::<T>::zeros();
@@ -344,20 +345,18 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             if !delta.iter().all(|v| v.is_finite()) {
                 return Err(SnapshotError::Numerical);
             }
-            if delta.norm() <= tolerance
-                || delta.norm_squared() <= chol.inverse().trace() * real(1e-6)
-            {
-                // the step is below rounding or far below the attitude uncertainty
-                converged = true;
-                break;
-            }
-            if pass == GAUSS_NEWTON_MAX_ITERATIONS {
-                break;
-            }
+            // H is in relative weights: the attitude variance is tr(H⁻¹) σ_min².
+            let small = delta.norm() <= tolerance
+                || delta.norm_squared() <= chol.inverse().trace() * scale * real(1e-6);
             q = (q * Quaternion::from_rotation_vector(&delta))
                 .normalize()
                 .map_err(|_| SnapshotError::Numerical)?;
             iterations += 1;
+            if small {
+                // the step was below rounding or far below the attitude uncertainty
+                converged = true;
+                break;
+            }
         }
         Ok(BaselineFit {
             q_rb: q.canonical(),
