@@ -16,7 +16,10 @@
 //!    range-domain cost (4) weighted by `(Σ_B ⊗ W⁻¹)⁻¹` up to a constant (step 4). The update is
 //!    `C ← C exp([δ]×)`, i.e. paper 002's `A ← exp(−[δθ]×) A` with `A = Cᵀ`; the Jacobian of
 //!    `Δr_ij` with respect to `δ` is `b_i × (A s_j)`. At most [`GAUSS_NEWTON_MAX_ITERATIONS`]
-//!    iterations; two or three reach the rounding level.
+//!    iterations; two or three reach the rounding level. This runs twice: first on the LS
+//!    baselines (cheap, also the candidate fit of the ambiguity search), then on the range
+//!    residuals themselves, which stay exact in `f32` when a poor sky makes `N` ill-conditioned;
+//!    each stage is bounded by [`GAUSS_NEWTON_MAX_ITERATIONS`].
 //!
 //! The covariance is the inverse Gauss–Newton Hessian: the Cramér–Rao bound of the linearized
 //! model, in the body-frame rotation vector `δ` with `C_true = Ĉ exp([δ]×)`.
