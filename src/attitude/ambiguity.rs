@@ -44,7 +44,6 @@
 //! candidates (a `heapless::Vec`); on the target it uses a few kilobytes of stack for
 //! `N = 12`.
 
-use heapless::Vec;
 use nalgebra::{SMatrix, Vector3};
 
 use crate::ekf::{chi_square_quantile, GateConfidence};
@@ -52,81 +51,12 @@ use crate::{real, AmbiguityError, Real, SnapshotError};
 
 use super::integer_search::{IntegerSearch, SearchFailure};
 use super::lambda::decorrelate;
-use super::range_model::{check_los, los_normal_matrix, RangeDifferences, SatelliteRanges};
+use super::range_model::{los_normal_matrix, RangeDifferences, SatelliteRanges};
+pub use super::range_model::{PhaseObservations, PhaseSatellite};
 use super::snapshot::{SnapshotSolution, SnapshotSolver};
 
 /// GPS L1 carrier wavelength, metres (c / 1575.42 MHz).
 pub const GPS_L1_WAVELENGTH_M: f64 = 0.190_293_672_798_365;
-
-/// Raw single differences of one satellite on every baseline.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PhaseSatellite<const M: usize, T = f32> {
-    /// Satellite id (PRN); unique within an epoch.
-    pub id: u8,
-    /// Unit line of sight to the satellite, reference frame.
-    pub los: Vector3<T>,
-    /// SD carrier phase `Φ_0 − Φ_i` per baseline, cycles (phase counted as a range: it grows
-    /// with distance), calibrated line biases removed, any integer offset allowed. Keep
-    /// `|φ| ≲ 10⁴` cycles in `f32` (remove whole cycles first).
-    pub phase_cycles: [T; M],
-    /// SD code `ρ_0 − ρ_i` per baseline, metres.
-    pub code_m: [T; M],
-    /// Variance multiplier of this satellite (1 nominal, e.g. `1/sin²(elevation)`), `> 0`.
-    pub cofactor: T,
-}
-
-/// One epoch of raw single differences for up to `N` satellites, validated on insertion.
-#[derive(Clone, Debug, Default)]
-pub struct PhaseObservations<const M: usize, const N: usize, T = f32> {
-    sats: Vec<PhaseSatellite<M, T>, N>,
-}
-
-impl<const M: usize, const N: usize, T: Real> PhaseObservations<M, N, T> {
-    /// An empty epoch.
-    pub fn new() -> Self {
-        Self { sats: Vec::new() }
-    }
-
-    /// Adds a satellite.
-    ///
-    /// # Errors
-    /// [`SnapshotError::NonFinite`], [`SnapshotError::InvalidLineOfSight`],
-    /// [`SnapshotError::InvalidNoise`] (cofactor `≤ 0`), [`SnapshotError::DuplicateSatellite`],
-    /// [`SnapshotError::TooManySatellites`]. Unchanged on error.
-    pub fn push(&mut self, sat: PhaseSatellite<M, T>) -> Result<(), SnapshotError> {
-        let finite = sat.phase_cycles.iter().all(|v| v.is_finite())
-            && sat.code_m.iter().all(|v| v.is_finite())
-            && sat.cofactor.is_finite();
-        if !finite {
-            return Err(SnapshotError::NonFinite);
-        }
-        check_los(&sat.los)?;
-        if !(sat.cofactor > T::zero()) {
-            return Err(SnapshotError::InvalidNoise);
-        }
-        if self.sats.iter().any(|s| s.id == sat.id) {
-            return Err(SnapshotError::DuplicateSatellite);
-        }
-        self.sats
-            .push(sat)
-            .map_err(|_| SnapshotError::TooManySatellites)
-    }
-
-    /// The satellites, in insertion order.
-    pub fn satellites(&self) -> &[PhaseSatellite<M, T>] {
-        &self.sats
-    }
-
-    /// Number of satellites.
-    pub fn len(&self) -> usize {
-        self.sats.len()
-    }
-
-    /// True when empty.
-    pub fn is_empty(&self) -> bool {
-        self.sats.is_empty()
-    }
-}
 
 /// Which integer search to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
