@@ -49,3 +49,166 @@ impl Format for ConstantVelocityModel {
         );
     }
 }
+
+// ---- attitude (paper 002) -------------------------------------------------------------------
+
+use crate::attitude::ambiguity::{
+    AmbiguityFix, AmbiguityResolver, PhaseObservations, PhaseSatellite,
+};
+use crate::attitude::lambda::Decorrelation;
+use crate::attitude::range_model::{
+    BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges,
+};
+use crate::attitude::snapshot::{SnapshotSolution, SnapshotSolver};
+use crate::attitude::wahba::{WahbaPair, WahbaProblem, WahbaSolution};
+
+impl<const M: usize> Format for SatelliteRanges<M, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "SatelliteRanges {{ id: {=u8}, los: {=[?]}, range_diff: {=[?]}, sigma: {=f32} }}",
+            self.id,
+            self.los.as_slice(),
+            &self.range_diff[..],
+            self.sigma
+        );
+    }
+}
+
+impl<const M: usize, const N: usize> Format for RangeDifferences<M, N, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "RangeDifferences {{ {=[?]} }}", self.satellites());
+    }
+}
+
+impl<const M: usize> Format for Baselines<M, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "Baselines {{ b (body, m):");
+        for b in self.as_array() {
+            write!(f, " {=[?]}", b.as_slice());
+        }
+        write!(f, " }}");
+    }
+}
+
+impl<const M: usize> Format for BaselineCorrelation<M, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "BaselineCorrelation {{ {=[?]} }}",
+            self.matrix().as_slice()
+        );
+    }
+}
+
+impl Format for WahbaPair<f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "WahbaPair {{ body: {=[?]}, reference: {=[?]}, weight: {=f32} }}",
+            self.body.as_slice(),
+            self.reference.as_slice(),
+            self.weight
+        );
+    }
+}
+
+impl Format for WahbaProblem<f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "WahbaProblem");
+    }
+}
+
+impl Format for WahbaSolution<f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "WahbaSolution {{ q_rb: {}, loss: {=f32}, eigen_gap: {=f32} }}",
+            self.q_rb, self.loss, self.eigen_gap
+        );
+    }
+}
+
+impl Format for SnapshotSolution<f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "SnapshotSolution {{ q_rb: {}, euler: {}, covariance: {=[?]}, residual_rms: {=f32}, chi_square: {=f32}, dof: {=u16}, iterations: {=u8}, quality: {} }}",
+            self.q_rb,
+            self.euler,
+            self.covariance.as_slice(),
+            self.residual_rms,
+            self.chi_square,
+            self.dof,
+            self.iterations,
+            self.quality
+        );
+    }
+}
+
+impl<const M: usize> Format for SnapshotSolver<M, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "SnapshotSolver {{ {}, {} }}",
+            self.baselines(),
+            self.correlation()
+        );
+    }
+}
+
+impl<const N: usize> Format for Decorrelation<N, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "Decorrelation {{ n: {=usize}, d: {=[?]} }}",
+            self.n,
+            self.d.as_slice()
+        );
+    }
+}
+
+impl<const M: usize> Format for PhaseSatellite<M, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "PhaseSatellite {{ id: {=u8}, los: {=[?]}, phase_cycles: {=[?]}, code_m: {=[?]}, cofactor: {=f32} }}",
+            self.id,
+            self.los.as_slice(),
+            &self.phase_cycles[..],
+            &self.code_m[..],
+            self.cofactor
+        );
+    }
+}
+
+impl<const M: usize, const N: usize> Format for PhaseObservations<M, N, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "PhaseObservations {{ {=[?]} }}", self.satellites());
+    }
+}
+
+impl<const M: usize, const N: usize> Format for AmbiguityFix<M, N, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "AmbiguityFix {{ ambiguities:");
+        for row in &self.ambiguities {
+            write!(f, " {=[?]}", &row[..]);
+        }
+        write!(
+            f,
+            ", solution: {}, cost: {=f32}, second_cost: {=f32}, ratio: {=f32}, nodes: {=u32}, candidates: {=u32} }}",
+            self.solution,
+            self.cost,
+            self.second_cost,
+            self.ratio,
+            self.nodes,
+            self.candidates
+        );
+    }
+}
+
+impl<const M: usize> Format for AmbiguityResolver<M, f32> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "AmbiguityResolver {{ {} }}", self.config());
+    }
+}

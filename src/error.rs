@@ -133,3 +133,147 @@ impl fmt::Display for GeometryError {
 }
 
 impl core::error::Error for GeometryError {}
+
+/// Errors of the snapshot attitude solvers ([`crate::attitude`]): input validation, the
+/// paper's formula and the bounded numerical routines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SnapshotError {
+    /// A baseline, line of sight, range difference, phase, code or noise value was NaN or
+    /// infinite.
+    NonFinite,
+    /// Fewer than 3 satellites: the reference-frame baselines `a_i = (SSᵀ)⁻¹ S r_i` need three
+    /// independent lines of sight.
+    TooFewSatellites,
+    /// More satellites than the compile-time capacity `N` of the observation set.
+    TooManySatellites,
+    /// The same satellite id was given twice in one epoch.
+    DuplicateSatellite,
+    /// A line-of-sight vector is not a unit vector (its norm is off 1 by more than 1e-3).
+    InvalidLineOfSight,
+    /// The lines of sight are (nearly) coplanar or collinear: `N = S W Sᵀ` is singular, so the
+    /// three components of a baseline cannot be separated.
+    CoplanarLineOfSight,
+    /// A noise standard deviation, cofactor or wavelength is zero or negative.
+    InvalidNoise,
+    /// A body baseline is shorter than 1 mm.
+    ZeroBaseline,
+    /// The first two body baselines are (nearly) parallel: the attitude about their common
+    /// direction is not observable.
+    CollinearBaselines,
+    /// The paper's formula (16) needs `G = BBᵀ` invertible: at least three non-coplanar
+    /// baselines (four non-coplanar antennas).
+    CoplanarBaselines,
+    /// Fewer baselines than the method needs (two for the snapshot solver, three for the
+    /// paper's formula).
+    TooFewBaselines,
+    /// The baseline noise correlation matrix is not symmetric positive definite.
+    InvalidCorrelation,
+    /// The paper's formula (16) would return a reflection (`det Q < 0`), not a rotation.
+    Reflection,
+    /// A bounded iteration (Jacobi eigen-decomposition) reached its bound without converging.
+    NotConverged,
+    /// A computation produced a non-finite or degenerate result from finite input.
+    Numerical,
+}
+
+impl Error for SnapshotError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::TooFewSatellites
+            | Self::TooManySatellites
+            | Self::DuplicateSatellite
+            | Self::InvalidLineOfSight
+            | Self::InvalidNoise
+            | Self::ZeroBaseline
+            | Self::CollinearBaselines
+            | Self::TooFewBaselines
+            | Self::InvalidCorrelation => ErrorKind::InvalidInput,
+            Self::CoplanarLineOfSight | Self::CoplanarBaselines | Self::Reflection => {
+                ErrorKind::Unobservable
+            }
+            Self::NotConverged => ErrorKind::NotConverged,
+            Self::Numerical => ErrorKind::Numerical,
+        }
+    }
+}
+
+impl fmt::Display for SnapshotError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::NonFinite => "non-finite snapshot input",
+            Self::TooFewSatellites => "fewer than 3 satellites",
+            Self::TooManySatellites => "more satellites than the capacity",
+            Self::DuplicateSatellite => "satellite listed twice",
+            Self::InvalidLineOfSight => "line of sight is not a unit vector",
+            Self::CoplanarLineOfSight => "lines of sight are coplanar or collinear",
+            Self::InvalidNoise => "noise, cofactor or wavelength is not positive",
+            Self::ZeroBaseline => "baseline of zero length",
+            Self::CollinearBaselines => "baselines are collinear",
+            Self::CoplanarBaselines => {
+                "baselines are coplanar (paper formula needs 3 non-coplanar)"
+            }
+            Self::TooFewBaselines => "too few baselines",
+            Self::InvalidCorrelation => "baseline correlation is not positive definite",
+            Self::Reflection => "paper formula (16) gives a reflection (det Q < 0)",
+            Self::NotConverged => "eigen-decomposition did not converge",
+            Self::Numerical => "snapshot computation failed numerically",
+        })
+    }
+}
+
+impl core::error::Error for SnapshotError {}
+
+/// Errors (refusals) of the integer ambiguity resolution ([`crate::attitude::ambiguity`]).
+///
+/// Every variant except [`AmbiguityError::Input`] is a *refusal*: the data were valid, but no
+/// integer solution could be validated, and the resolver returns no attitude rather than a
+/// possibly wrong one. Retry with the next epoch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AmbiguityError {
+    /// The observations or the configuration were invalid (see the inner error).
+    Input(SnapshotError),
+    /// The integer search visited its node budget before it could prove its answer.
+    SearchBudgetExhausted,
+    /// No integer candidate lies inside the search bound: the data are inconsistent with the
+    /// model (a cycle slip, a wrong baseline, a multipath outlier).
+    NoCandidate,
+    /// The ratio test failed: the second-best candidate fits almost as well as the best.
+    Ambiguous,
+    /// The best candidate fails the χ² test of the whole model (99.9 %).
+    ModelRejected,
+}
+
+impl From<SnapshotError> for AmbiguityError {
+    fn from(e: SnapshotError) -> Self {
+        Self::Input(e)
+    }
+}
+
+impl Error for AmbiguityError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::Input(e) => e.kind(),
+            Self::SearchBudgetExhausted => ErrorKind::NotConverged,
+            Self::NoCandidate | Self::Ambiguous | Self::ModelRejected => ErrorKind::Unobservable,
+        }
+    }
+}
+
+impl fmt::Display for AmbiguityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Input(e) => write!(f, "ambiguity input: {e}"),
+            Self::SearchBudgetExhausted => f.write_str("integer search budget exhausted"),
+            Self::NoCandidate => f.write_str("no integer candidate inside the search bound"),
+            Self::Ambiguous => f.write_str("ratio test failed: ambiguities not validated"),
+            Self::ModelRejected => f.write_str("best integer candidate fails the model test"),
+        }
+    }
+}
+
+impl core::error::Error for AmbiguityError {}

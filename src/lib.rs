@@ -34,6 +34,7 @@
 //! | Module | What it is |
 //! |---|---|
 //! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
+//! | [`attitude`] | Snapshot attitude from carrier phase (paper 002) with integer ambiguity resolution |
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
@@ -68,6 +69,7 @@
 #[macro_use]
 mod log;
 
+pub mod attitude;
 pub mod ekf;
 pub mod error;
 pub mod geometry;
@@ -77,7 +79,7 @@ pub mod selftest;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{ErrorKind, FilterError, GeometryError};
+pub use error::{AmbiguityError, ErrorKind, FilterError, GeometryError, SnapshotError};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

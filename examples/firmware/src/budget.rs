@@ -67,6 +67,7 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
 /// Every budget of the firmware, in region order.
 pub fn run_all() {
     ekf_budgets();
+    snapshot_budgets();
 }
 
 fn ekf_budgets() {
@@ -101,4 +102,54 @@ fn ekf_budgets() {
         let a = black_box(&mut six).predict(black_box(&f), black_box(&q)).is_ok();
         a && six.update_sequential(black_box(&y), &h, &r_diag, None).is_ok()
     });
+}
+
+/// Paper 002: one snapshot solve (8 satellites, ambiguities known) and one solve from raw
+/// single differences with the constrained integer ambiguity search (8 satellites).
+fn snapshot_budgets() {
+    use gnss_attitude::attitude::example;
+    let (Ok(solver), Ok(resolver)) = (example::solver(), example::resolver()) else {
+        hprintln!("budget snapshot: example setup failed");
+        return;
+    };
+    let (Ok(ranges), Ok(phases)) = (example::ranges(8, 1), example::phases(8, 1)) else {
+        hprintln!("budget snapshot: example data failed");
+        return;
+    };
+    // The calls go through `#[inline(never)]` wrappers so that their frames lie below the
+    // painted stack and are counted.
+    let ok = measure("snapshot solve, 2 baselines x 8 satellites (Wahba + Gauss-Newton)", || {
+        solve_once(black_box(&solver), black_box(&ranges))
+    });
+    let fix = measure("ambiguity resolve + snapshot, 2 baselines x 8 satellites (LAMBDA + constrained search)", || {
+        resolve_once(black_box(&resolver), black_box(&phases))
+    });
+    match fix {
+        Ok(f) => hprintln!(
+            "budget snapshot: solve ok {}, fix nodes {} candidates {} ratio {} z00 {} (truth {})",
+            ok,
+            f.nodes,
+            f.candidates,
+            f.ratio,
+            f.ambiguities[0][0],
+            example::ambiguity(0, 0)
+        ),
+        Err(e) => hprintln!("budget snapshot: resolve refused: {:?}", e),
+    }
+}
+
+#[inline(never)]
+fn solve_once(
+    solver: &gnss_attitude::attitude::snapshot::SnapshotSolver<2>,
+    ranges: &gnss_attitude::attitude::range_model::RangeDifferences<2, 12>,
+) -> bool {
+    solver.solve(ranges).is_ok()
+}
+
+#[inline(never)]
+fn resolve_once(
+    resolver: &gnss_attitude::attitude::ambiguity::AmbiguityResolver<2>,
+    phases: &gnss_attitude::attitude::ambiguity::PhaseObservations<2, 12>,
+) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::AmbiguityError> {
+    resolver.resolve(phases)
 }

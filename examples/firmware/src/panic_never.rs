@@ -46,9 +46,44 @@ fn main() -> ! {
     let _ = black_box(q.to_rotation_vector());
     let _ = black_box(q.normalize());
     let _ = black_box(run_ekf_self_test());
+    snapshot_entry_points();
     loop {
         cortex_m::asm::nop();
     }
+}
+
+/// Paper 002's entry points with opaque inputs.
+#[inline(never)]
+fn snapshot_entry_points() {
+    use gnss_attitude::attitude::ambiguity::{AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite};
+    use gnss_attitude::attitude::paper002::paper_formula;
+    use gnss_attitude::attitude::range_model::{BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges};
+    use gnss_attitude::attitude::snapshot::SnapshotSolver;
+    use gnss_attitude::attitude::wahba::{solve_wahba, WahbaPair};
+    use nalgebra::Vector3;
+    let v = |x: f32| black_box(Vector3::new(x, 0.5 * x, 0.25));
+    let mut ranges2 = RangeDifferences::<2, 12, f32>::new();
+    let mut ranges3 = RangeDifferences::<3, 12, f32>::new();
+    let mut phases = PhaseObservations::<2, 12, f32>::new();
+    for id in 0..black_box(12u8) {
+        let _ = ranges2.push(SatelliteRanges { id, los: v(0.6), range_diff: black_box([0.1, 0.2]), sigma: black_box(0.004) });
+        let _ = ranges3.push(SatelliteRanges { id, los: v(0.6), range_diff: black_box([0.1, 0.2, 0.3]), sigma: black_box(0.004) });
+        let _ = phases.push(PhaseSatellite { id, los: v(0.6), phase_cycles: black_box([1.1, 2.2]), code_m: black_box([0.1, 0.3]), cofactor: black_box(1.0) });
+    }
+    if let Ok(b2) = Baselines::new([v(1.0), v(-1.0)]) {
+        let corr = BaselineCorrelation::new(black_box(nalgebra::Matrix2::new(1.0, 0.5, 0.5, 1.0))).unwrap_or(BaselineCorrelation::independent());
+        let solver = SnapshotSolver::new(b2, corr);
+        let _ = black_box(solver.solve(&ranges2));
+        if let Ok(r) = AmbiguityResolver::new(solver, black_box(AmbiguityConfig::gps_l1(0.003, 0.3))) {
+            let _ = black_box(r.resolve(&phases));
+        }
+    }
+    if let Ok(b3) = Baselines::new([v(1.0), v(-1.0), v(0.3)]) {
+        let _ = black_box(paper_formula(&b3, &ranges3));
+        let _ = black_box(SnapshotSolver::new(b3, BaselineCorrelation::shared_base_antenna()).solve(&ranges3));
+    }
+    let pair = WahbaPair { body: v(1.0), reference: v(0.7), weight: black_box(1.0) };
+    let _ = black_box(solve_wahba(&[pair, pair]));
 }
 
 #[panic_handler]

@@ -8,8 +8,10 @@
 //! * [`orbit`]: LEO orbit (Kepler + secular J2), ECI/ECEF, the local orbital frame.
 //! * [`attitude`]: attitude histories (nadir pointing with tumble, detumbling body).
 //! * [`gyro`]: a MEMS gyro triad with paper 001's error model and quantized output.
+//! * [`gps`]: the GPS constellation from a YUMA almanac; elevation, azimuth, line of sight.
 
 pub mod attitude;
+pub mod gps;
 pub mod gyro;
 pub mod kinematics;
 pub mod orbit;
