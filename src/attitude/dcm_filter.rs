@@ -89,6 +89,10 @@ pub struct DirectionCosineFilter<T: Real = f32> {
     y: SVector<T, 6>,
     /// `R`, the covariance of `Ŷ`.
     r: SMatrix<T, 6, 6>,
+    /// NIS of the last step's baselines (6 degrees of freedom); 0 before the first step.
+    nis: T,
+    /// Smallest QR pivot ratio of `Φ` over the last step's RK4 stages; 1 before the first.
+    pivot_ratio: T,
 }
 
 /// Right-hand side of eq. (10) at one RK4 stage.
@@ -131,6 +135,8 @@ impl<T: Real> DirectionCosineFilter<T> {
             config,
             y,
             r,
+            nis: T::zero(),
+            pivot_ratio: T::one(),
         })
     }
 
@@ -159,17 +165,31 @@ impl<T: Real> DirectionCosineFilter<T> {
         self.model.dcm(&self.y)
     }
 
-    /// One step of `Δt`: eq. (10) integrated by RK4 from `t_{k−1}` to `t_k` with the epoch's
-    /// velocity differences (mean over the step) and baselines (at `t_k`) of the filter's two
-    /// pairs. Returns the estimate at `t_k`.
+    /// One step of `Δt` ([`Self::propagate`]) and the estimate at its end ([`Self::estimate`]).
+    ///
+    /// # Errors
+    /// Those of both; the filter is unchanged on error.
+    pub fn step(&mut self, epoch: &BaselineEpoch<T>) -> Result<FilterEstimate<T>, DcmError> {
+        let mut next = self.clone();
+        next.propagate(epoch)?;
+        let estimate = next.estimate()?;
+        *self = next;
+        Ok(estimate)
+    }
+
+    /// One step of `Δt` of the state alone: eq. (10) integrated by RK4 from `t_{k−1}` to `t_k`
+    /// with the epoch's velocity differences (mean over the step) and baselines (at `t_k`) of
+    /// the filter's two pairs. Keeps the NIS of the baselines for [`Self::estimate`].
+    ///
+    /// The six direction cosines need not stay near a rotation (nothing in eq. (10) holds them
+    /// there), so this can succeed where [`Self::estimate`] then fails.
     ///
     /// # Errors
     /// [`DcmError::MissingBaseline`], [`DcmError::NonFinite`], [`DcmError::ZeroLengthBaseline`]
     /// for bad input; [`DcmError::SingularJacobian`] when `Φ` is singular at a stage;
-    /// [`DcmError::NotPositiveDefinite`] when `R` loses definiteness; [`DcmError::NotARotation`]
-    /// when `M(Ŷ)` cannot be orthonormalized; [`DcmError::Numerical`]. The filter is unchanged
-    /// on error.
-    pub fn step(&mut self, epoch: &BaselineEpoch<T>) -> Result<FilterEstimate<T>, DcmError> {
+    /// [`DcmError::NotPositiveDefinite`] when `R` loses definiteness; [`DcmError::Numerical`].
+    /// The filter is unchanged on error.
+    pub fn propagate(&mut self, epoch: &BaselineEpoch<T>) -> Result<(), DcmError> {
         let [p1, p2] = self.config.pairs;
         let (z1, z2) = (epoch.baseline(p1)?, epoch.baseline(p2)?);
         let (v1, v2) = (
@@ -216,10 +236,23 @@ impl<T: Real> DirectionCosineFilter<T> {
             .min(k2.pivot_ratio)
             .min(k3.pivot_ratio)
             .min(k4.pivot_ratio);
-        let estimate = self.estimate_at(&y, &r, &z, pivot_ratio)?;
+        // NIS of the sample against the new state: S_ν = Φ R Φᵀ + σ_p² I
+        let phi = self.model.jacobian(&y);
+        let sigma2 = self.config.sigma_baseline * self.config.sigma_baseline;
+        let s_nu =
+            symmetrize(&(phi * r * phi.transpose())) + SMatrix::<T, 6, 6>::identity() * sigma2;
+        let nu = z - self.model.observation(&y);
+        let nis = Cholesky::new(s_nu)
+            .map(|ch| nu.dot(&ch.solve(&nu)))
+            .ok_or(DcmError::NotPositiveDefinite)?;
+        if !nis.is_finite() {
+            return Err(DcmError::Numerical);
+        }
         self.y = y;
         self.r = r;
-        Ok(estimate)
+        self.nis = nis;
+        self.pivot_ratio = pivot_ratio;
+        Ok(())
     }
 
     /// Eq. (6) and (10): `(dŶ/dt, dR/dt)` at `(y, r)` against the baseline sample `z`.
@@ -261,36 +294,26 @@ impl<T: Real> DirectionCosineFilter<T> {
         )
     }
 
-    /// The attitude estimate for `(y, r)`: orthonormalized `M(Ŷ)`, the attitude covariance
-    /// `S R Sᵀ` with `S = ∂θ/∂Y`, and the NIS of the sample `z` with
-    /// `S_ν = Φ R Φᵀ + σ_p² I`.
-    fn estimate_at(
-        &self,
-        y: &SVector<T, 6>,
-        r: &SMatrix<T, 6, 6>,
-        z: &SVector<T, 6>,
-        pivot_ratio: T,
-    ) -> Result<FilterEstimate<T>, DcmError> {
-        let c = nearest_rotation(&self.model.dcm(y))?;
-        let s = self.model.attitude_jacobian(&c, y);
-        let covariance = symmetrize(&(s * r * s.transpose()));
-        let phi = self.model.jacobian(y);
-        let sigma2 = self.config.sigma_baseline * self.config.sigma_baseline;
-        let s_nu =
-            symmetrize(&(phi * r * phi.transpose())) + SMatrix::<T, 6, 6>::identity() * sigma2;
-        let nu = z - self.model.observation(y);
-        let nis = Cholesky::new(s_nu)
-            .map(|ch| nu.dot(&ch.solve(&nu)))
-            .ok_or(DcmError::NotPositiveDefinite)?;
+    /// The attitude estimate of the current state: `M(Ŷ)` orthonormalized by
+    /// [`nearest_rotation`], the attitude covariance `S R Sᵀ` with `S = ∂θ/∂Y`, the NIS of the
+    /// last step, and the health from that NIS and the conditioning of `Φ`.
+    ///
+    /// # Errors
+    /// [`DcmError::NotARotation`] when `M(Ŷ)` is too far from a rotation to be orthonormalized
+    /// (its kept columns have become (nearly) parallel); [`DcmError::Numerical`].
+    pub fn estimate(&self) -> Result<FilterEstimate<T>, DcmError> {
+        let c = nearest_rotation(&self.model.dcm(&self.y))?;
+        let s = self.model.attitude_jacobian(&c, &self.y);
+        let covariance = symmetrize(&(s * self.r * s.transpose()));
         let gate: T = real(chi_square_quantile(6, GateConfidence::P999).unwrap_or(22.46));
-        let health = if !(pivot_ratio >= real(WEAK_GEOMETRY_PIVOT_RATIO)) {
+        let health = if !(self.pivot_ratio >= real(WEAK_GEOMETRY_PIVOT_RATIO)) {
             FilterHealth::WeakGeometry
-        } else if !(nis <= gate) {
+        } else if !(self.nis <= gate) {
             FilterHealth::InnovationOutlier
         } else {
             FilterHealth::Nominal
         };
-        FilterEstimate::from_rotation(c, covariance, nis, 6, health)
+        FilterEstimate::from_rotation(c, covariance, self.nis, 6, health)
     }
 }
 

@@ -1,20 +1,23 @@
 //! The multi-structure filter of paper 000 (its conclusion): three six-state filters on the
 //! baseline pairs {12, 23}, {12, 13}, {23, 13}, and a robust combination of their outputs.
 //!
-//! **Combination rule** ([`fuse`]). Each structure `k` reports an attitude `C_k` and an
-//! attitude-error covariance `P_k` (body axes). With the first structure as reference,
-//! `θ_k = log(C₁ᵀ C_k)`.
-//! 1. Two structures agree when `(θ_k − θ_l)ᵀ (P_k + P_l)⁻¹ (θ_k − θ_l)` is inside the 99.9 %
-//!    χ²₃ gate.
-//! 2. A structure that agrees with at least one other is an inlier. If no two agree, the
-//!    component-wise median of the `θ_k` is used, with the largest of the `P_k`.
+//! **Combination rule** ([`fuse`]). Each structure `k` whose direction cosines can be
+//! orthonormalized reports an attitude `C_k` and an attitude-error covariance `P_k` (body
+//! axes); one whose kept columns have collapsed (this happens to the two structures with `b₁₃`
+//! under the literal noise reading, whose baselines are only 2° apart) reports nothing.
+//! 1. The reference is the reporting structure with the smallest `tr P_k`;
+//!    `θ_k = log(C_refᵀ C_k)`.
+//! 2. Two structures agree when `(θ_k − θ_l)ᵀ (P_k + P_l)⁻¹ (θ_k − θ_l)` is inside the 99.9 %
+//!    χ²₃ gate. A structure that agrees with at least one other is an inlier.
 //! 3. The inliers are combined with information weights,
 //!    `θ = (Σ P_k⁻¹)⁻¹ Σ P_k⁻¹ θ_k`, and the reported covariance is that of **covariance
 //!    intersection** with equal weights, `n · (Σ P_k⁻¹)⁻¹` for `n` inliers: the structures
 //!    share baselines (each baseline feeds two of them), so their errors are correlated by an
 //!    amount the filter does not know, and `(Σ P_k⁻¹)⁻¹` alone would be optimistic.
-//! 4. `C = C₁ · exp([θ]×)`. Health is [`FilterHealth::StructuresDisagree`] when a structure was
-//!    left out or the median was used, otherwise the worst health of the inliers.
+//! 4. If no two agree, the reporting structure with the smallest sum of distances to the
+//!    others (the medoid; ties and a lone reporter: the smallest `tr P_k`) is used alone.
+//! 5. `C = C_ref · exp([θ]×)`. Health is [`FilterHealth::StructuresDisagree`] when fewer than
+//!    three structures entered the combination, otherwise the worst health of the three.
 
 use nalgebra::{Cholesky, Matrix3, SMatrix, Vector3};
 
@@ -38,11 +41,12 @@ pub const STRUCTURE_PAIRS: [[BaselinePair; 2]; 3] = [
 /// The combined estimate and what each structure reported.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MultiStructureEstimate<T = f32> {
-    /// The robust combination (its `nis` is the mean NIS of the inlier structures, 6 degrees
-    /// of freedom).
+    /// The robust combination (its `nis` is the mean NIS of the structures that entered it,
+    /// 6 degrees of freedom).
     pub fused: FilterEstimate<T>,
-    /// The estimates of the structures on [`STRUCTURE_PAIRS`], in order.
-    pub structures: [FilterEstimate<T>; 3],
+    /// The estimates of the structures on [`STRUCTURE_PAIRS`], in order; `None` for a
+    /// structure whose direction cosines could not be orthonormalized this epoch.
+    pub structures: [Option<FilterEstimate<T>>; 3],
     /// Which structures entered the combination.
     pub inliers: [bool; 3],
 }
@@ -99,19 +103,21 @@ impl<T: Real> MultiStructureFilter<T> {
         &self.filters
     }
 
-    /// Steps the three filters (all or none: the epoch must carry the three baselines and
-    /// velocity differences) and combines them.
+    /// Propagates the three filters (all or none: the epoch must carry the three baselines
+    /// and velocity differences), forms their estimates and combines them.
     ///
     /// # Errors
-    /// The first error of a structure's [`DirectionCosineFilter::step`], or of [`fuse`]. The
-    /// filter is unchanged on error.
+    /// The first error of a structure's [`DirectionCosineFilter::propagate`], or of [`fuse`]
+    /// (no structure could be orthonormalized). The filter is unchanged on error.
     pub fn step(
         &mut self,
         epoch: &BaselineEpoch<T>,
     ) -> Result<MultiStructureEstimate<T>, DcmError> {
         let mut next = self.filters.clone();
-        let [f0, f1, f2] = &mut next;
-        let structures = [f0.step(epoch)?, f1.step(epoch)?, f2.step(epoch)?];
+        for f in next.iter_mut() {
+            f.propagate(epoch)?;
+        }
+        let structures = next.each_ref().map(|f| f.estimate().ok());
         let (fused, inliers) = fuse(&structures)?;
         self.filters = next;
         Ok(MultiStructureEstimate {
@@ -122,93 +128,132 @@ impl<T: Real> MultiStructureFilter<T> {
     }
 }
 
-/// The combination rule of the module documentation. Returns the combined estimate and the
-/// inlier flags.
+/// A structure's rotation vector relative to the reference and its covariance.
+type Tangent<T> = Option<(Vector3<T>, Matrix3<T>)>;
+
+/// Mahalanobis distance `(θ_k − θ_l)ᵀ (P_k + P_l)⁻¹ (θ_k − θ_l)` of two reporting structures.
+fn distance<T: Real>(a: &Tangent<T>, b: &Tangent<T>) -> Result<Option<T>, DcmError> {
+    match (a, b) {
+        (Some((ta, pa)), Some((tb, pb))) => {
+            let d = ta - tb;
+            let ch = Cholesky::new(symmetrize(&(pa + pb))).ok_or(DcmError::NotPositiveDefinite)?;
+            Ok(Some(d.dot(&ch.solve(&d))))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// The combination rule of the module documentation. Returns the combined estimate and which
+/// structures entered it.
 ///
 /// # Errors
-/// [`DcmError::NotARotation`] if an attitude cannot be compared; [`DcmError::NotPositiveDefinite`]
-/// if a covariance has no Cholesky factor.
+/// [`DcmError::NotARotation`] when no structure reports; [`DcmError::NotPositiveDefinite`]
+/// when a covariance has no Cholesky factor.
 pub fn fuse<T: Real>(
-    estimates: &[FilterEstimate<T>; 3],
+    estimates: &[Option<FilterEstimate<T>>; 3],
 ) -> Result<(FilterEstimate<T>, [bool; 3]), DcmError> {
-    let [e0, e1, e2] = estimates;
-    let reference = e0.c_rb;
-    let theta = [
-        Vector3::zeros(),
-        log_so3(&(reference.transpose() * e1.c_rb))?,
-        log_so3(&(reference.transpose() * e2.c_rb))?,
-    ];
-    let p = [e0.covariance, e1.covariance, e2.covariance];
+    // 1. reference: the reporting structure with the smallest covariance trace
+    let reference = estimates
+        .iter()
+        .flatten()
+        .fold(None::<&FilterEstimate<T>>, |best, e| match best {
+            Some(b) if !(e.covariance.trace() < b.covariance.trace()) => Some(b),
+            _ => Some(e),
+        })
+        .ok_or(DcmError::NotARotation)?;
+    let mut tangents: [Tangent<T>; 3] = [None; 3];
+    for (slot, e) in tangents.iter_mut().zip(estimates) {
+        if let Some(e) = e {
+            *slot = Some((
+                log_so3(&(reference.c_rb.transpose() * e.c_rb))?,
+                e.covariance,
+            ));
+        }
+    }
+    // 2. pairwise agreement
     let gate: T = real(chi_square_quantile(3, GateConfidence::P999).unwrap_or(16.27));
-    // agree[k][l]: step 1
-    let [t0, t1, t2] = theta;
-    let [p0, p1, p2] = p;
-    let agree = |tk: Vector3<T>, pk: Matrix3<T>, tl: Vector3<T>, pl: Matrix3<T>| {
-        let d = tk - tl;
-        let ch = Cholesky::new(symmetrize(&(pk + pl))).ok_or(DcmError::NotPositiveDefinite)?;
-        Ok::<bool, DcmError>(d.dot(&ch.solve(&d)) <= gate)
-    };
-    let (a01, a02, a12) = (
-        agree(t0, p0, t1, p1)?,
-        agree(t0, p0, t2, p2)?,
-        agree(t1, p1, t2, p2)?,
+    let [t0, t1, t2] = tangents;
+    let (d01, d02, d12) = (
+        distance(&t0, &t1)?,
+        distance(&t0, &t2)?,
+        distance(&t1, &t2)?,
     );
-    let inliers = [a01 || a02, a01 || a12, a02 || a12];
+    let ok = |d: Option<T>| d.is_some_and(|d| d <= gate);
+    let mut inliers = [ok(d01) || ok(d02), ok(d01) || ok(d12), ok(d02) || ok(d12)];
     let count = inliers.iter().filter(|&&i| i).count();
-    let (theta_f, covariance, mut health) = if count == 0 {
-        // step 2: no two agree — component-wise median, the largest covariance
-        let median = Vector3::from_fn(|i, _| {
-            let c = |t: &Vector3<T>| t.get(i).copied().unwrap_or_else(T::zero);
-            median3(c(&t0), c(&t1), c(&t2))
-        });
-        let widest = [p1, p2]
-            .into_iter()
-            .fold(p0, |w, pk| if pk.trace() > w.trace() { pk } else { w });
-        (median, widest, FilterHealth::StructuresDisagree)
+    let zero_if_none = |d: Option<T>| d.unwrap_or_else(T::zero);
+    let sums = [
+        zero_if_none(d01) + zero_if_none(d02),
+        zero_if_none(d01) + zero_if_none(d12),
+        zero_if_none(d02) + zero_if_none(d12),
+    ];
+    let (theta, covariance) = if count == 0 {
+        // 4. no two agree: the medoid alone
+        let mut best: Option<(usize, T, T)> = None;
+        for (k, (t, sum)) in tangents.iter().zip(sums).enumerate() {
+            if let Some((_, p)) = t {
+                let better = match best {
+                    None => true,
+                    Some((_, s, tr)) => sum < s || (!(sum > s) && p.trace() < tr),
+                };
+                if better {
+                    best = Some((k, sum, p.trace()));
+                }
+            }
+        }
+        let k = best.map_or(0, |b| b.0);
+        if let Some(flag) = inliers.get_mut(k) {
+            *flag = true;
+        }
+        tangents
+            .get(k)
+            .copied()
+            .flatten()
+            .ok_or(DcmError::NotARotation)?
     } else {
-        // step 3: information-weighted mean, covariance intersection with equal weights
+        // 3. information-weighted mean, covariance intersection with equal weights
         let mut info = Matrix3::<T>::zeros();
         let mut info_theta = Vector3::<T>::zeros();
-        for ((tk, pk), _) in theta.iter().zip(p.iter()).zip(inliers).filter(|(_, i)| *i) {
-            let ch = Cholesky::new(symmetrize(pk)).ok_or(DcmError::NotPositiveDefinite)?;
+        for ((tk, pk), _) in tangents
+            .iter()
+            .zip(inliers)
+            .filter_map(|(t, i)| t.map(|t| (t, i)))
+            .filter(|(_, i)| *i)
+        {
+            let ch = Cholesky::new(symmetrize(&pk)).ok_or(DcmError::NotPositiveDefinite)?;
             let pk_inv = ch.inverse();
             info += pk_inv;
             info_theta += pk_inv * tk;
         }
         let ch = Cholesky::new(symmetrize(&info)).ok_or(DcmError::NotPositiveDefinite)?;
-        let theta_f = ch.solve(&info_theta);
-        let covariance = ch.inverse() * real::<T>(count as f64);
-        let health = if count < 3 {
-            FilterHealth::StructuresDisagree
-        } else {
-            FilterHealth::Nominal
-        };
-        (theta_f, covariance, health)
+        (
+            ch.solve(&info_theta),
+            ch.inverse() * real::<T>(count as f64),
+        )
+    };
+    // 5. health, NIS, attitude
+    let used = inliers.iter().filter(|&&i| i).count();
+    let mut health = if used < 3 {
+        FilterHealth::StructuresDisagree
+    } else {
+        FilterHealth::Nominal
     };
     if health == FilterHealth::Nominal {
-        // the worst health of the structures (all are inliers here)
-        for e in estimates {
+        for e in estimates.iter().flatten() {
             if e.health != FilterHealth::Nominal {
                 health = e.health;
             }
         }
     }
-    // mean NIS of the structures that were used (all three for the median)
     let (sum, n) = estimates
         .iter()
         .zip(inliers)
-        .filter(|(_, i)| *i || count == 0)
-        .fold((T::zero(), 0u32), |(s, n), (e, _)| (s + e.nis, n + 1));
+        .filter_map(|(e, i)| e.filter(|_| i))
+        .fold((T::zero(), 0u32), |(s, n), e| (s + e.nis, n + 1));
     let nis = sum / real::<T>(f64::from(n.max(1)));
-    // step 4: C = C₁ exp([θ]×)
-    let q = (e0.q_rb * Quaternion::from_rotation_vector(&theta_f)).normalize()?;
+    let q = (reference.q_rb * Quaternion::from_rotation_vector(&theta)).normalize()?;
     let fused = FilterEstimate::from_rotation(q.to_dcm(), symmetrize(&covariance), nis, 6, health)?;
     Ok((fused, inliers))
-}
-
-/// The median of three numbers.
-fn median3<T: Real>(a: T, b: T, c: T) -> T {
-    a.max(b).min(a.min(b).max(c))
 }
 
 #[cfg(test)]
@@ -228,18 +273,11 @@ mod tests {
     }
 
     #[test]
-    fn median_of_three() {
-        assert_eq!(median3(3.0, 1.0, 2.0), 2.0);
-        assert_eq!(median3(1.0, 2.0, 3.0), 2.0);
-        assert_eq!(median3(2.0, 3.0, 1.0), 2.0);
-    }
-
-    #[test]
     fn agreeing_structures_are_averaged_by_information() {
         let (fused, inliers) = fuse(&[
-            estimate(0.0, 0.01),
-            estimate(0.01, 0.01),
-            estimate(0.005, 0.02),
+            Some(estimate(0.0, 0.01)),
+            Some(estimate(0.01, 0.01)),
+            Some(estimate(0.005, 0.02)),
         ])
         .unwrap();
         assert_eq!(inliers, [true; 3]);
@@ -254,21 +292,31 @@ mod tests {
     #[test]
     fn an_outlier_structure_is_left_out() {
         let (fused, inliers) = fuse(&[
-            estimate(0.0, 0.01),
-            estimate(0.5, 0.01),
-            estimate(0.01, 0.01),
+            Some(estimate(0.0, 0.01)),
+            Some(estimate(0.5, 0.01)),
+            Some(estimate(0.01, 0.01)),
         ])
         .unwrap();
         assert_eq!(inliers, [true, false, true]);
         assert!((fused.euler.yaw - 0.005).abs() < 1e-9);
         assert_eq!(fused.health, FilterHealth::StructuresDisagree);
-        let (median, inliers) = fuse(&[
-            estimate(0.0, 0.001),
-            estimate(0.5, 0.001),
-            estimate(0.2, 0.001),
+        // no two agree: the medoid (the middle one) alone
+        let (medoid, inliers) = fuse(&[
+            Some(estimate(0.0, 0.001)),
+            Some(estimate(0.5, 0.001)),
+            Some(estimate(0.2, 0.001)),
         ])
         .unwrap();
-        assert_eq!(inliers, [false; 3]);
-        assert!((median.euler.yaw - 0.2).abs() < 1e-9);
+        assert_eq!(inliers, [false, false, true]);
+        assert!((medoid.euler.yaw - 0.2).abs() < 1e-9);
+        // a structure that does not report is left out; none reporting is an error
+        let (two, inliers) =
+            fuse(&[None, Some(estimate(0.1, 0.01)), Some(estimate(0.11, 0.01))]).unwrap();
+        assert_eq!(inliers, [false, true, true]);
+        assert!((two.euler.yaw - 0.105).abs() < 1e-9);
+        assert_eq!(
+            fuse::<f64>(&[None, None, None]),
+            Err(DcmError::NotARotation)
+        );
     }
 }
