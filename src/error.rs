@@ -158,8 +158,9 @@ pub enum DcmError {
     /// (nearly) parallel, or the eliminated column's body axis lies (nearly) in the antenna
     /// plane (`n_k → 0` with `n = b₁ × b₂`, the paper's `n_x = 0` case).
     SingularGeometry,
-    /// `Φ(Ŷ)` is numerically singular at the current estimate (the six direction cosines have
-    /// drifted far from a rotation). Re-initialize the filter.
+    /// `Φ(Ŷ)` is singular in working precision at the current estimate. Since
+    /// `|det Φ(Y)| ≥ |n_k|³` for every state, this happens only for geometry close to the
+    /// limit of [`DcmError::SingularGeometry`], or after an overflow. Re-initialize the filter.
     SingularJacobian,
     /// The covariance lost positive definiteness during the step (the step is rejected).
     NotPositiveDefinite,

@@ -16,7 +16,7 @@
 //! at the RK4 stage time `t_{k−1} + cΔt` the filter compares `H(Ŷ)` with the sample carried
 //! back along the same chord, `Z − (1 − c) Δt V̂`. Holding `Z` over the step instead would bias
 //! the innovation by `ż Δt / 2` (1.5 mm in the paper's experiment, 60 % of the steady-state
-//! σ_z of the "intensity" noise reading).
+//! `σ_z` of the "intensity" noise reading).
 //!
 //! **Covariance hygiene in f32.** After each step `R` is symmetrized, its diagonal is held at or
 //! above a floor of `(16 ε)²` (the state's resolution), and it is checked by Cholesky: a step

@@ -95,17 +95,31 @@ pub fn attitude_error(truth: &Matrix3<f64>, estimate: &Matrix3<f64>) -> Vector3<
     .scaled_axis()
 }
 
+/// Where in the run an estimate belongs.
+#[derive(Clone, Copy)]
+struct At<'a> {
+    step: usize,
+    t: f64,
+    second_half: bool,
+    last: bool,
+    keep_series: bool,
+    truth: &'a Matrix3<f64>,
+}
+
 impl Track {
     fn record<T: Real>(
         &mut self,
-        step: usize,
-        t: f64,
-        second_half: bool,
-        last: bool,
-        keep_series: bool,
-        truth: &Matrix3<f64>,
+        at: &At<'_>,
         result: Result<FilterEstimate<T>, gnss_attitude::DcmError>,
     ) {
+        let At {
+            step,
+            t,
+            second_half,
+            last,
+            keep_series,
+            truth,
+        } = *at;
         let est = match result {
             Ok(e) => e,
             Err(_) => {
@@ -256,7 +270,14 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
         );
         let e32 = truth::epoch_f32(&e64);
         let (half, last) = (t > setup.duration / 2.0, k == steps);
-        let keep = reference;
+        let at = At {
+            step: k,
+            t,
+            second_half: half,
+            last,
+            keep_series: reference,
+            truth: &m_now,
+        };
         let multi_result = multi.step(&e32);
         let six32 = multi_result
             .as_ref()
@@ -266,36 +287,28 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
         match multi_result {
             Ok(m) => {
                 let six = m.structures[0].ok_or(gnss_attitude::DcmError::NotARotation);
-                out.six_state.record(k, t, half, last, keep, &m_now, six);
+                out.six_state.record(&at, six);
                 for (track, e) in out.structures_b13.iter_mut().zip(&m.structures[1..]) {
-                    track.record(
-                        k,
-                        t,
-                        half,
-                        last,
-                        false,
-                        &m_now,
-                        e.ok_or(gnss_attitude::DcmError::NotARotation),
-                    );
+                    let quiet = At {
+                        keep_series: false,
+                        ..at
+                    };
+                    track.record(&quiet, e.ok_or(gnss_attitude::DcmError::NotARotation));
                 }
                 for (c, i) in out.inlier_counts.iter_mut().zip(m.inliers) {
                     *c += usize::from(i);
                 }
-                out.multi_structure
-                    .record(k, t, half, last, keep, &m_now, Ok(m.fused));
+                out.multi_structure.record(&at, Ok(m.fused));
             }
             Err(e) => {
-                out.six_state
-                    .record::<f32>(k, t, half, last, keep, &m_now, Err(e));
-                out.multi_structure
-                    .record::<f32>(k, t, half, last, keep, &m_now, Err(e));
+                out.six_state.record::<f32>(&at, Err(e));
+                out.multi_structure.record::<f32>(&at, Err(e));
             }
         }
         let r = rigid_all.step(&e32);
-        out.rigid_body.record(k, t, half, last, keep, &m_now, r);
+        out.rigid_body.record(&at, r);
         let rp = rigid_pair.step(&truth::without_13(&e32));
-        out.rigid_body_pair
-            .record(k, t, half, last, keep, &m_now, rp);
+        out.rigid_body_pair.record(&at, rp);
         if reference {
             let s64 = six64.step(&e64);
             let r64 = rigid64.step(&e64);
@@ -310,7 +323,7 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
         }
         if setup.doppler_study.is_some() {
             let df = doppler_free.step(&truth::without_doppler(&e32));
-            out.doppler_free.record(k, t, half, last, keep, &m_now, df);
+            out.doppler_free.record(&at, df);
             let el = truth::epoch_f32(&truth::epoch(
                 &setup.array,
                 &m_prev,
@@ -321,11 +334,9 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
                 &mut rng_literal,
             ));
             let lr = literal_rigid.step(&el);
-            out.literal_rigid_body
-                .record(k, t, half, last, keep, &m_now, lr);
+            out.literal_rigid_body.record(&at, lr);
             let lf = literal_free.step(&truth::without_doppler(&el));
-            out.literal_doppler_free
-                .record(k, t, half, last, keep, &m_now, lf);
+            out.literal_doppler_free.record(&at, lf);
         }
         m_prev = m_now;
     }
