@@ -12,7 +12,7 @@
 //! figures are its components. Statistics over the second half of the runs, pooled; `max` and
 //! `final` are the largest magnitudes over the runs.
 
-mod bounds;
+pub mod bounds;
 mod files;
 mod leo;
 mod metrics;
