@@ -52,10 +52,10 @@ pub fn write_files(
                     Series::line("six-state", line(tracks[0]), 0),
                     Series::line("multi-structure", line(tracks[1]), 1),
                     Series::line("rigid-body", line(tracks[2]), 2),
-                    Series::bound("±1σ six-state bound", flat(bs[i]), 0),
-                    Series::bound("", flat(-bs[i]), 0),
-                    Series::bound("±1σ rigid-body bound", flat(br[i]), 2),
-                    Series::bound("", flat(-br[i]), 2),
+                    Series::bound("+1σ six-state bound", flat(bs[i]), 0),
+                    Series::bound("-1σ six-state bound", flat(-bs[i]), 0),
+                    Series::bound("+1σ rigid-body bound", flat(br[i]), 2),
+                    Series::bound("-1σ rigid-body bound", flat(-br[i]), 2),
                 ],
             }
         })
