@@ -6,12 +6,15 @@
 use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::ColumnChoice;
+use gnss_attitude::attitude::direction_cosine::DirectionCosineModel;
 use gnss_attitude::attitude::multi_structure::MultiStructureFilter;
+use gnss_attitude::attitude::multi_structure::STRUCTURE_PAIRS;
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
 use gnss_attitude::ekf::GateConfidence;
 use gnss_attitude::error::Error;
 use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::{DcmError, ErrorKind};
+use host_sim::scenarios::dcm::bounds::{self, Noise};
 use host_sim::scenarios::dcm::run_plan;
 use host_sim::scenarios::dcm::truth::{self, Motion};
 use host_sim::scenarios::RunContext;
@@ -107,6 +110,36 @@ fn wide_geometry_gains_an_order_of_magnitude() {
         assert!(a > 5.0 * b, "{filter}: narrow {a} wide {b}");
     }
     assert_near_bound(&wide, "rigid_body");
+}
+
+#[test]
+fn core_steady_state_covariance_matches_the_host_bound_derived_independently() {
+    // core: σ_z² (∂θ/∂Y Φ⁻¹)(…)ᵀ from the model's Jacobians; host-sim: θ solved from
+    // δz = ([θ]× + S) b with S restricted by the eliminated column's cross-product relation
+    let array = paper_array();
+    let noise = Noise {
+        sigma_baseline: 0.6,
+        sigma_velocity: 0.1,
+        dt: DT,
+    };
+    for columns in [ColumnChoice::Paper, ColumnChoice::LargestNormal] {
+        for pairs in STRUCTURE_PAIRS {
+            let model = DirectionCosineModel::new(
+                &array.baseline(pairs[0]),
+                &array.baseline(pairs[1]),
+                columns,
+            )
+            .unwrap();
+            let core = model
+                .steady_state_attitude_covariance(noise.sigma_z2())
+                .unwrap();
+            let host = bounds::six_state(&array, pairs, model.eliminated_column(), noise).unwrap();
+            assert!(
+                (core - host).norm() < 1e-9 * host.norm(),
+                "{pairs:?} {columns:?}\n{core}\n{host}"
+            );
+        }
+    }
 }
 
 /// Paper truth and literal-noise measurements, f64.

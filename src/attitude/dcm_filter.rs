@@ -296,7 +296,10 @@ impl<T: Real> DirectionCosineFilter<T> {
 
     /// The attitude estimate of the current state: `M(Ŷ)` orthonormalized by
     /// [`nearest_rotation`], the attitude covariance `S R Sᵀ` with `S = ∂θ/∂Y`, the NIS of the
-    /// last step, and the health from that NIS and the conditioning of `Φ`.
+    /// last step, and the health: [`FilterHealth::WeakGeometry`] from the conditioning of `Φ`,
+    /// then [`FilterHealth::ConstraintViolated`] when the rotation constraints `g(Ŷ)` fail
+    /// `gᵀ (G R Gᵀ)⁻¹ g ≤ χ²₃(99.9 %)` with `G = ∂g/∂Y`, then
+    /// [`FilterHealth::InnovationOutlier`] from the NIS.
     ///
     /// # Errors
     /// [`DcmError::NotARotation`] when `M(Ŷ)` is too far from a rotation to be orthonormalized
@@ -306,8 +309,17 @@ impl<T: Real> DirectionCosineFilter<T> {
         let s = self.model.attitude_jacobian(&c, &self.y);
         let covariance = symmetrize(&(s * self.r * s.transpose()));
         let gate: T = real(chi_square_quantile(6, GateConfidence::P999).unwrap_or(22.46));
+        // the truth satisfies g(Y) = 0: test the state's constraint residual against R
+        let g = DirectionCosineModel::constraint_residual(&self.y);
+        let g_jac = DirectionCosineModel::constraint_jacobian(&self.y);
+        let constraint_nis = Cholesky::new(symmetrize(&(g_jac * self.r * g_jac.transpose())))
+            .map(|ch| g.dot(&ch.solve(&g)));
+        let constraint_gate: T =
+            real(chi_square_quantile(3, GateConfidence::P999).unwrap_or(16.27));
         let health = if !(self.pivot_ratio >= real(WEAK_GEOMETRY_PIVOT_RATIO)) {
             FilterHealth::WeakGeometry
+        } else if !constraint_nis.is_some_and(|c| c <= constraint_gate) {
+            FilterHealth::ConstraintViolated
         } else if !(self.nis <= gate) {
             FilterHealth::InnovationOutlier
         } else {

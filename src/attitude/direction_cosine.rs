@@ -181,6 +181,51 @@ impl<T: Real> DirectionCosineModel<T> {
         g
     }
 
+    /// The steady-state attitude-error covariance of the six-state filter on this geometry
+    /// (body axes, rad²), to first order: `σ_z² L Lᵀ` with `L = (∂θ/∂Y) Φ⁻¹`, evaluated at any
+    /// rotation (it does not depend on the attitude), `σ_z² = σ_p σ_v Δt` the steady-state
+    /// variance of each baseline component (m²). `None` if `Φ` is singular.
+    pub fn steady_state_attitude_covariance(&self, sigma_z2: T) -> Option<Matrix3<T>> {
+        let y = self.state_from_dcm(&Matrix3::identity());
+        let (phi_inv, _) = givens_inverse(&self.jacobian(&y))?;
+        let l = self.attitude_jacobian(&Matrix3::identity(), &y) * phi_inv;
+        Some(l * l.transpose() * sigma_z2)
+    }
+
+    /// The rotation constraints of the state, `g(Y) = (|c₂|² − 1, |c₃|² − 1, c₂·c₃)`: zero for
+    /// every state of a rotation, whatever the attitude.
+    pub fn constraint_residual(y: &SVector<T, 6>) -> Vector3<T> {
+        let (c2, c3) = Self::columns(y);
+        Vector3::new(
+            c2.norm_squared() - T::one(),
+            c3.norm_squared() - T::one(),
+            c2.dot(&c3),
+        )
+    }
+
+    /// `∂g/∂Y` (3×6) of [`Self::constraint_residual`]: rows `(2c₂ᵀ, 0)`, `(0, 2c₃ᵀ)`,
+    /// `(c₃ᵀ, c₂ᵀ)` in the `(c₂, c₃)` split, interleaved like the state.
+    pub fn constraint_jacobian(y: &SVector<T, 6>) -> SMatrix<T, 3, 6> {
+        let (c2, c3) = Self::columns(y);
+        let two: T = real(2.0);
+        let mut g = SMatrix::<T, 3, 6>::zeros();
+        for i in 0..3 {
+            let (a, b) = (c2[i], c3[i]);
+            for (row, (d2, d3)) in [(a * two, T::zero()), (T::zero(), b * two), (b, a)]
+                .into_iter()
+                .enumerate()
+            {
+                if let Some(v) = g.get_mut((row, y_index(i, false))) {
+                    *v = d2;
+                }
+                if let Some(v) = g.get_mut((row, y_index(i, true))) {
+                    *v = d3;
+                }
+            }
+        }
+        g
+    }
+
     /// `∂θ/∂Y` (3×6): the body-axes rotation vector `θ = vee(skew(Ĉᵀ δM))` of a state
     /// perturbation `δY` about the attitude `c_hat` (a proper rotation close to `M(Y)`). Maps
     /// the state covariance to the attitude-error covariance `S R Sᵀ`.
@@ -369,7 +414,14 @@ mod tests {
             let dphi_a =
                 (model.jacobian(&(y + d)) * a - model.jacobian(&(y - d)) * a) / (2.0 * eps);
             assert!((dphi_a - g.column(j)).norm() < 1e-8, "∂Φ/∂Y column {j}");
+            let dg = (DirectionCosineModel::<f64>::constraint_residual(&(y + d))
+                - DirectionCosineModel::<f64>::constraint_residual(&(y - d)))
+                / (2.0 * eps);
+            let cj = DirectionCosineModel::<f64>::constraint_jacobian(&y);
+            assert!((dg - cj.column(j)).norm() < 1e-8, "∂g/∂Y column {j}");
         }
+        let on = model.state_from_dcm(&rotation(0.9));
+        assert!(DirectionCosineModel::<f64>::constraint_residual(&on).norm() < 1e-14);
     }
 
     #[test]

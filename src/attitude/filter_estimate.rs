@@ -20,8 +20,12 @@ pub enum FilterHealth {
     /// pivot ratio is below the warning level): the estimate is usable but errors are strongly
     /// amplified along one direction.
     WeakGeometry,
-    /// Multi-structure filter only: one structure disagreed with the two others and was left
-    /// out of the combination, or no two agreed and the median was used.
+    /// Six-state filter only: the direction cosines violate the rotation constraints
+    /// (`|c₂|² = |c₃|² = 1`, `c₂·c₃ = 0`) by more than their own covariance allows (χ²₃ at
+    /// 99.9 %): the state has left SO(3) beyond its stated uncertainty, so its covariance (and
+    /// the attitude derived from it) is not to be trusted.
+    ConstraintViolated,
+    /// Multi-structure filter only: fewer than three structures entered the combination.
     StructuresDisagree,
 }
 

@@ -5,19 +5,28 @@
 //! orthonormalized reports an attitude `C_k` and an attitude-error covariance `P_k` (body
 //! axes); one whose kept columns have collapsed (this happens to the two structures with `b₁₃`
 //! under the literal noise reading, whose baselines are only 2° apart) reports nothing.
-//! 1. The reference is the reporting structure with the smallest `tr P_k`;
-//!    `θ_k = log(C_refᵀ C_k)`.
-//! 2. Two structures agree when `(θ_k − θ_l)ᵀ (P_k + P_l)⁻¹ (θ_k − θ_l)` is inside the 99.9 %
-//!    χ²₃ gate. A structure that agrees with at least one other is an inlier.
-//! 3. The inliers are combined with information weights,
+//! 1. The structures are ranked by the precision their geometry allows: the trace of the
+//!    steady-state covariance [`steady_state_attitude_covariance`](super::direction_cosine::DirectionCosineModel::steady_state_attitude_covariance)
+//!    (fixed, attitude independent). The anchor is the best-ranked reporting structure whose
+//!    innovation passed its gate (health not [`FilterHealth::InnovationOutlier`]); if none
+//!    passed, the best-ranked reporting one. `θ_k = log(C_anchorᵀ C_k)`. (Ranking by the
+//!    filters' own covariances fails when a state has left SO(3): its covariance is then
+//!    meaningless, typically too small.)
+//! 2. Another structure enters when it is *sound* — its innovation inside its gate and its
+//!    direction cosines within their covariance of the rotation constraints (health neither
+//!    [`FilterHealth::InnovationOutlier`] nor [`FilterHealth::ConstraintViolated`]) — and
+//!    agrees with the anchor:
+//!    `(θ_k − θ_a)ᵀ (P_k + P_a)⁻¹ (θ_k − θ_a)` inside the 99.9 % χ²₃ gate. The anchor
+//!    always enters. (No majority vote: the structures share baselines — each baseline feeds
+//!    two of them — so two structures that agree with each other may share one bad baseline;
+//!    a bad baseline shows in the NIS of the two structures that use it.)
+//! 3. The entrants are combined with information weights,
 //!    `θ = (Σ P_k⁻¹)⁻¹ Σ P_k⁻¹ θ_k`, and the reported covariance is that of **covariance
-//!    intersection** with equal weights, `n · (Σ P_k⁻¹)⁻¹` for `n` inliers: the structures
-//!    share baselines (each baseline feeds two of them), so their errors are correlated by an
-//!    amount the filter does not know, and `(Σ P_k⁻¹)⁻¹` alone would be optimistic.
-//! 4. If no two agree, the reporting structure with the smallest sum of distances to the
-//!    others (the medoid; ties and a lone reporter: the smallest `tr P_k`) is used alone.
-//! 5. `C = C_ref · exp([θ]×)`. Health is [`FilterHealth::StructuresDisagree`] when fewer than
-//!    three structures entered the combination, otherwise the worst health of the three.
+//!    intersection** with equal weights, `n · (Σ P_k⁻¹)⁻¹` for `n` entrants: the structures'
+//!    errors are correlated through the shared baselines by an amount the filter does not
+//!    know, and `(Σ P_k⁻¹)⁻¹` alone would be optimistic.
+//! 4. `C = C_anchor · exp([θ]×)`. Health is [`FilterHealth::StructuresDisagree`] when fewer
+//!    than three structures entered, otherwise the worst health of the three.
 
 use nalgebra::{Cholesky, Matrix3, SMatrix, Vector3};
 
@@ -55,6 +64,9 @@ pub struct MultiStructureEstimate<T = f32> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct MultiStructureFilter<T: Real = f32> {
     filters: [DirectionCosineFilter<T>; 3],
+    /// Trace of each structure's steady-state attitude covariance for unit `σ_z²` (rad²/m²):
+    /// the geometric ranking of step 1.
+    geometric_trace: [T; 3],
 }
 
 impl<T: Real> MultiStructureFilter<T> {
@@ -73,8 +85,18 @@ impl<T: Real> MultiStructureFilter<T> {
             DirectionCosineFilter::new(array, DcmFilterConfig { pairs, ..template }, c_rb0, r0)
         };
         let [a, b, c] = STRUCTURE_PAIRS;
+        let filters = [make(a)?, make(b)?, make(c)?];
+        let mut geometric_trace = [T::zero(); 3];
+        for (t, f) in geometric_trace.iter_mut().zip(&filters) {
+            *t = f
+                .model()
+                .steady_state_attitude_covariance(T::one())
+                .ok_or(DcmError::SingularJacobian)?
+                .trace();
+        }
         Ok(Self {
-            filters: [make(a)?, make(b)?, make(c)?],
+            filters,
+            geometric_trace,
         })
     }
 
@@ -118,7 +140,7 @@ impl<T: Real> MultiStructureFilter<T> {
             f.propagate(epoch)?;
         }
         let structures = next.each_ref().map(|f| f.estimate().ok());
-        let (fused, inliers) = fuse(&structures)?;
+        let (fused, inliers) = fuse(&structures, &self.geometric_trace)?;
         self.filters = next;
         Ok(MultiStructureEstimate {
             fused,
@@ -128,112 +150,75 @@ impl<T: Real> MultiStructureFilter<T> {
     }
 }
 
-/// A structure's rotation vector relative to the reference and its covariance.
-type Tangent<T> = Option<(Vector3<T>, Matrix3<T>)>;
-
-/// Mahalanobis distance `(θ_k − θ_l)ᵀ (P_k + P_l)⁻¹ (θ_k − θ_l)` of two reporting structures.
-fn distance<T: Real>(a: &Tangent<T>, b: &Tangent<T>) -> Result<Option<T>, DcmError> {
-    match (a, b) {
-        (Some((ta, pa)), Some((tb, pb))) => {
-            let d = ta - tb;
-            let ch = Cholesky::new(symmetrize(&(pa + pb))).ok_or(DcmError::NotPositiveDefinite)?;
-            Ok(Some(d.dot(&ch.solve(&d))))
-        }
-        _ => Ok(None),
-    }
-}
-
-/// The combination rule of the module documentation. Returns the combined estimate and which
-/// structures entered it.
+/// The combination rule of the module documentation, with the structures ranked by
+/// `geometric_trace` (smaller is better). Returns the combined estimate and which structures
+/// entered it.
 ///
 /// # Errors
 /// [`DcmError::NotARotation`] when no structure reports; [`DcmError::NotPositiveDefinite`]
 /// when a covariance has no Cholesky factor.
 pub fn fuse<T: Real>(
     estimates: &[Option<FilterEstimate<T>>; 3],
+    geometric_trace: &[T; 3],
 ) -> Result<(FilterEstimate<T>, [bool; 3]), DcmError> {
-    // 1. reference: the reporting structure with the smallest covariance trace
-    let reference = estimates
-        .iter()
-        .flatten()
-        .fold(None::<&FilterEstimate<T>>, |best, e| match best {
-            Some(b) if !(e.covariance.trace() < b.covariance.trace()) => Some(b),
-            _ => Some(e),
-        })
-        .ok_or(DcmError::NotARotation)?;
-    let mut tangents: [Tangent<T>; 3] = [None; 3];
-    for (slot, e) in tangents.iter_mut().zip(estimates) {
-        if let Some(e) = e {
-            *slot = Some((
-                log_so3(&(reference.c_rb.transpose() * e.c_rb))?,
-                e.covariance,
-            ));
-        }
-    }
-    // 2. pairwise agreement
-    let gate: T = real(chi_square_quantile(3, GateConfidence::P999).unwrap_or(16.27));
-    let [t0, t1, t2] = tangents;
-    let (d01, d02, d12) = (
-        distance(&t0, &t1)?,
-        distance(&t0, &t2)?,
-        distance(&t1, &t2)?,
-    );
-    let ok = |d: Option<T>| d.is_some_and(|d| d <= gate);
-    let mut inliers = [ok(d01) || ok(d02), ok(d01) || ok(d12), ok(d02) || ok(d12)];
-    let count = inliers.iter().filter(|&&i| i).count();
-    let zero_if_none = |d: Option<T>| d.unwrap_or_else(T::zero);
-    let sums = [
-        zero_if_none(d01) + zero_if_none(d02),
-        zero_if_none(d01) + zero_if_none(d12),
-        zero_if_none(d02) + zero_if_none(d12),
-    ];
-    let (theta, covariance) = if count == 0 {
-        // 4. no two agree: the medoid alone
-        let mut best: Option<(usize, T, T)> = None;
-        for (k, (t, sum)) in tangents.iter().zip(sums).enumerate() {
-            if let Some((_, p)) = t {
-                let better = match best {
-                    None => true,
-                    Some((_, s, tr)) => sum < s || (!(sum > s) && p.trace() < tr),
-                };
-                if better {
-                    best = Some((k, sum, p.trace()));
-                }
-            }
-        }
-        let k = best.map_or(0, |b| b.0);
-        if let Some(flag) = inliers.get_mut(k) {
-            *flag = true;
-        }
-        tangents
-            .get(k)
-            .copied()
-            .flatten()
-            .ok_or(DcmError::NotARotation)?
-    } else {
-        // 3. information-weighted mean, covariance intersection with equal weights
-        let mut info = Matrix3::<T>::zeros();
-        let mut info_theta = Vector3::<T>::zeros();
-        for ((tk, pk), _) in tangents
-            .iter()
-            .zip(inliers)
-            .filter_map(|(t, i)| t.map(|t| (t, i)))
-            .filter(|(_, i)| *i)
-        {
-            let ch = Cholesky::new(symmetrize(&pk)).ok_or(DcmError::NotPositiveDefinite)?;
-            let pk_inv = ch.inverse();
-            info += pk_inv;
-            info_theta += pk_inv * tk;
-        }
-        let ch = Cholesky::new(symmetrize(&info)).ok_or(DcmError::NotPositiveDefinite)?;
-        (
-            ch.solve(&info_theta),
-            ch.inverse() * real::<T>(count as f64),
+    // 1. anchor: the best-ranked reporting structure whose innovation passed its gate
+    let sound = |e: &FilterEstimate<T>| {
+        !matches!(
+            e.health,
+            FilterHealth::InnovationOutlier | FilterHealth::ConstraintViolated
         )
     };
-    // 5. health, NIS, attitude
-    let used = inliers.iter().filter(|&&i| i).count();
-    let mut health = if used < 3 {
+    let most_precise = |gated_only: bool| {
+        estimates
+            .iter()
+            .zip(geometric_trace)
+            .enumerate()
+            .filter_map(|(k, (e, t))| e.as_ref().map(|e| (k, e, *t)))
+            .filter(|(_, e, _)| !gated_only || e.health != FilterHealth::InnovationOutlier)
+            .fold(
+                None::<(usize, &FilterEstimate<T>, T)>,
+                |best, (k, e, t)| match best {
+                    Some((_, _, bt)) if !(t < bt) => best,
+                    _ => Some((k, e, t)),
+                },
+            )
+            .map(|(k, e, _)| (k, e))
+    };
+    let (anchor_index, anchor) = most_precise(true)
+        .or_else(|| most_precise(false))
+        .ok_or(DcmError::NotARotation)?;
+    let gate: T = real(chi_square_quantile(3, GateConfidence::P999).unwrap_or(16.27));
+    // 2. the structures that agree with the anchor, 3. information-weighted
+    let mut inliers = [false; 3];
+    let mut info = Matrix3::<T>::zeros();
+    let mut info_theta = Vector3::<T>::zeros();
+    for (k, (e, inlier)) in estimates.iter().zip(inliers.iter_mut()).enumerate() {
+        let Some(e) = e else { continue };
+        let theta = log_so3(&(anchor.c_rb.transpose() * e.c_rb))?;
+        let enters = if k == anchor_index {
+            true
+        } else if !sound(e) {
+            false
+        } else {
+            let ch = Cholesky::new(symmetrize(&(e.covariance + anchor.covariance)))
+                .ok_or(DcmError::NotPositiveDefinite)?;
+            theta.dot(&ch.solve(&theta)) <= gate
+        };
+        if enters {
+            let ch =
+                Cholesky::new(symmetrize(&e.covariance)).ok_or(DcmError::NotPositiveDefinite)?;
+            let p_inv = ch.inverse();
+            info += p_inv;
+            info_theta += p_inv * theta;
+            *inlier = true;
+        }
+    }
+    let count = inliers.iter().filter(|&&i| i).count();
+    let ch = Cholesky::new(symmetrize(&info)).ok_or(DcmError::NotPositiveDefinite)?;
+    let theta = ch.solve(&info_theta);
+    let covariance = ch.inverse() * real::<T>(count as f64);
+    // 4. health, NIS, attitude
+    let mut health = if count < 3 {
         FilterHealth::StructuresDisagree
     } else {
         FilterHealth::Nominal
@@ -251,7 +236,7 @@ pub fn fuse<T: Real>(
         .filter_map(|(e, i)| e.filter(|_| i))
         .fold((T::zero(), 0u32), |(s, n), e| (s + e.nis, n + 1));
     let nis = sum / real::<T>(f64::from(n.max(1)));
-    let q = (reference.q_rb * Quaternion::from_rotation_vector(&theta)).normalize()?;
+    let q = (anchor.q_rb * Quaternion::from_rotation_vector(&theta)).normalize()?;
     let fused = FilterEstimate::from_rotation(q.to_dcm(), symmetrize(&covariance), nis, 6, health)?;
     Ok((fused, inliers))
 }
@@ -260,6 +245,9 @@ pub fn fuse<T: Real>(
 mod tests {
     use super::*;
     use crate::geometry::rot_z;
+
+    /// The paper geometry's ranking: the {12, 23} structure first.
+    const RANK: [f64; 3] = [1.0, 2.0, 2.1];
 
     fn estimate(angle: f64, sigma: f64) -> FilterEstimate<f64> {
         FilterEstimate::from_rotation(
@@ -274,11 +262,14 @@ mod tests {
 
     #[test]
     fn agreeing_structures_are_averaged_by_information() {
-        let (fused, inliers) = fuse(&[
-            Some(estimate(0.0, 0.01)),
-            Some(estimate(0.01, 0.01)),
-            Some(estimate(0.005, 0.02)),
-        ])
+        let (fused, inliers) = fuse(
+            &[
+                Some(estimate(0.0, 0.01)),
+                Some(estimate(0.01, 0.01)),
+                Some(estimate(0.005, 0.02)),
+            ],
+            &RANK,
+        )
         .unwrap();
         assert_eq!(inliers, [true; 3]);
         let yaw = fused.euler.yaw;
@@ -291,31 +282,66 @@ mod tests {
 
     #[test]
     fn an_outlier_structure_is_left_out() {
-        let (fused, inliers) = fuse(&[
-            Some(estimate(0.0, 0.01)),
-            Some(estimate(0.5, 0.01)),
-            Some(estimate(0.01, 0.01)),
-        ])
+        let (fused, inliers) = fuse(
+            &[
+                Some(estimate(0.0, 0.01)),
+                Some(estimate(0.5, 0.01)),
+                Some(estimate(0.01, 0.01)),
+            ],
+            &RANK,
+        )
         .unwrap();
         assert_eq!(inliers, [true, false, true]);
         assert!((fused.euler.yaw - 0.005).abs() < 1e-9);
         assert_eq!(fused.health, FilterHealth::StructuresDisagree);
-        // no two agree: the medoid (the middle one) alone
-        let (medoid, inliers) = fuse(&[
-            Some(estimate(0.0, 0.001)),
-            Some(estimate(0.5, 0.001)),
-            Some(estimate(0.2, 0.001)),
-        ])
+        // two that agree with each other do not outvote the more precise anchor
+        let (anchored, inliers) = fuse(
+            &[
+                Some(estimate(0.0, 0.001)),
+                Some(estimate(0.5, 0.002)),
+                Some(estimate(0.5, 0.002)),
+            ],
+            &RANK,
+        )
         .unwrap();
-        assert_eq!(inliers, [false, false, true]);
-        assert!((medoid.euler.yaw - 0.2).abs() < 1e-9);
+        assert_eq!(inliers, [true, false, false]);
+        assert!(anchored.euler.yaw.abs() < 1e-9);
+        // an anchor whose own innovation failed its gate gives way to the next most precise
+        let mut suspect = estimate(0.0, 0.001);
+        suspect.health = FilterHealth::InnovationOutlier;
+        let (_, inliers) = fuse(
+            &[
+                Some(suspect),
+                Some(estimate(0.5, 0.002)),
+                Some(estimate(0.5, 0.002)),
+            ],
+            &RANK,
+        )
+        .unwrap();
+        assert_eq!(inliers, [false, true, true]);
+        // the anchor is chosen by geometry: a structure claiming a tiny covariance does not
+        // take over (its state may have left SO(3))
+        let (ranked, inliers) = fuse(
+            &[
+                Some(estimate(0.0, 0.01)),
+                Some(estimate(0.5, 1e-4)),
+                Some(estimate(0.5, 1e-4)),
+            ],
+            &RANK,
+        )
+        .unwrap();
+        assert_eq!(inliers, [true, false, false]);
+        assert!(ranked.euler.yaw.abs() < 1e-9);
         // a structure that does not report is left out; none reporting is an error
-        let (two, inliers) =
-            fuse(&[None, Some(estimate(0.1, 0.01)), Some(estimate(0.11, 0.01))]).unwrap();
+        let (two, inliers) = fuse(
+            &[None, Some(estimate(0.1, 0.01)), Some(estimate(0.11, 0.01))],
+            &RANK,
+        )
+        .unwrap();
         assert_eq!(inliers, [false, true, true]);
         assert!((two.euler.yaw - 0.105).abs() < 1e-9);
         assert_eq!(
-            fuse::<f64>(&[None, None, None]),
+            fuse::<f64>(&[None, None, None], &RANK),
             Err(DcmError::NotARotation)
         );
     }

@@ -85,7 +85,7 @@ fn dcm_entry_points() {
     }
     if let Ok(mut multi) = MultiStructureFilter::new(&array, config, &c0, &r0) {
         if let Ok(m) = multi.step(&epoch) {
-            let _ = black_box(fuse(&black_box(m.structures)));
+            let _ = black_box(fuse(&black_box(m.structures), &black_box([1.0f32, 2.0, 3.0])));
         }
     }
     let rigid_config = RigidBodyConfig {
