@@ -9,5 +9,6 @@ pub mod baseline_epoch;
 pub mod dcm_filter;
 pub mod direction_cosine;
 pub mod filter_estimate;
+mod givens;
 pub mod multi_structure;
 pub mod rigid_body;
