@@ -277,3 +277,96 @@ impl fmt::Display for AmbiguityError {
 }
 
 impl core::error::Error for AmbiguityError {}
+/// Errors of the baseline and Doppler attitude filters of paper 000 ([`crate::attitude`]:
+/// the direction-cosine filter, the multi-structure filter and the rigid-body filter).
+///
+/// A step that returns one of these leaves its filter exactly as it was before the call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum DcmError {
+    /// A measurement, an antenna position, an initial attitude or a covariance was NaN or
+    /// infinite.
+    NonFinite,
+    /// A baseline vector or a velocity difference that the filter needs is absent (one of its
+    /// two antennas has no solution in this epoch).
+    MissingBaseline,
+    /// A baseline — an antenna-position difference in body axes, or a measured baseline in the
+    /// reference frame — is shorter than [`crate::attitude::baseline_epoch::MIN_BASELINE_LENGTH`].
+    ZeroLengthBaseline,
+    /// A configuration value is out of its domain: a non-positive step or noise level, a pair
+    /// of identical baselines, a covariance that is not symmetric positive definite.
+    InvalidConfig,
+    /// The antenna geometry makes the model singular at every attitude: the two baselines are
+    /// (nearly) parallel, or the eliminated column's body axis lies (nearly) in the antenna
+    /// plane (`n_k → 0` with `n = b₁ × b₂`, the paper's `n_x = 0` case).
+    SingularGeometry,
+    /// `Φ(Ŷ)` is singular in working precision at the current estimate. Since
+    /// `|det Φ(Y)| ≥ |n_k|³` for every state, this happens only for geometry close to the
+    /// limit of [`DcmError::SingularGeometry`], or after an overflow. Re-initialize the filter.
+    SingularJacobian,
+    /// The covariance lost positive definiteness during the step (the step is rejected).
+    NotPositiveDefinite,
+    /// The estimate could not be turned into a rotation (its direction cosines are too far
+    /// from orthonormal, or the orthonormalization did not converge).
+    NotARotation,
+    /// The shared Kalman filter toolkit rejected the step.
+    Filter(FilterError),
+    /// The step overflowed or produced a non-finite number from finite input.
+    Numerical,
+}
+
+impl Error for DcmError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::MissingBaseline | Self::ZeroLengthBaseline | Self::InvalidConfig => {
+                ErrorKind::InvalidInput
+            }
+            Self::SingularGeometry | Self::SingularJacobian => ErrorKind::Unobservable,
+            Self::NotPositiveDefinite => ErrorKind::NotPositiveDefinite,
+            Self::NotARotation | Self::Numerical => ErrorKind::Numerical,
+            Self::Filter(e) => e.kind(),
+        }
+    }
+}
+
+impl fmt::Display for DcmError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NonFinite => f.write_str("non-finite baseline filter input"),
+            Self::MissingBaseline => {
+                f.write_str("a needed baseline or velocity difference is missing")
+            }
+            Self::ZeroLengthBaseline => f.write_str("baseline of (near) zero length"),
+            Self::InvalidConfig => f.write_str("invalid baseline filter configuration"),
+            Self::SingularGeometry => {
+                f.write_str("antenna geometry makes the direction-cosine model singular")
+            }
+            Self::SingularJacobian => f.write_str("observation Jacobian is numerically singular"),
+            Self::NotPositiveDefinite => f.write_str("covariance lost positive definiteness"),
+            Self::NotARotation => f.write_str("estimate is too far from a rotation"),
+            Self::Filter(e) => write!(f, "filter toolkit: {e}"),
+            Self::Numerical => f.write_str("baseline filter step overflowed"),
+        }
+    }
+}
+
+impl core::error::Error for DcmError {}
+
+impl From<FilterError> for DcmError {
+    fn from(e: FilterError) -> Self {
+        Self::Filter(e)
+    }
+}
+
+impl From<GeometryError> for DcmError {
+    fn from(e: GeometryError) -> Self {
+        match e {
+            GeometryError::NonFinite => Self::NonFinite,
+            GeometryError::ZeroLength
+            | GeometryError::NotARotation
+            | GeometryError::NotConverged => Self::NotARotation,
+        }
+    }
+}

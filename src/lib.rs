@@ -34,8 +34,8 @@
 //! | Module | What it is |
 //! |---|---|
 //! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
-//! | [`attitude`] | Snapshot attitude from carrier phase (paper 002) with integer ambiguity resolution |
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
+//! | [`attitude`] | Attitude estimators: snapshot from carrier phase with ambiguity resolution (paper 002); direction-cosine, multi-structure and rigid-body filters (paper 000) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
@@ -79,7 +79,7 @@ pub mod selftest;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{AmbiguityError, ErrorKind, FilterError, GeometryError, SnapshotError};
+pub use error::{AmbiguityError, DcmError, ErrorKind, FilterError, GeometryError, SnapshotError};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

@@ -1,5 +1,12 @@
-//! Attitude estimators.
+//! Attitude estimators: from measurements of the three antennas to `C_rb` with a covariance.
 //!
+//! Frames: `C_rb` is the attitude (body to reference); paper 002's `A` is `C_br = C_rbᵀ`;
+//! paper 000's `M` is `C_rb` with ECEF as the reference. Lines of sight `s_j` are unit vectors
+//! from the antennas to satellite `j` in the reference frame; baselines `b_i` are from the base
+//! antenna (antenna 0) to antenna `i` in body axes, metres. A range difference is
+//! `Δr_ij = ρ_0j − ρ_ij = b_iᵀ A s_j`.
+//!
+//! **Snapshot (paper 002)**, one epoch of carrier phase:
 //! * [`range_model`]: paper 002's model `R = Bᵀ A S` (range differences between antennas), the
 //!   validated input types and the body baselines.
 //! * [`eigen`]: a bounded cyclic Jacobi eigen-decomposition of small symmetric matrices.
@@ -15,17 +22,27 @@
 //!   than returning a wrong fix.
 //! * [`example`]: a deterministic example epoch (docs, benchmarks, firmware budgets).
 //!
-//! Frames: `C_rb` is the attitude (body to reference); paper 002's `A` is `C_br = C_rbᵀ`.
-//! Lines of sight `s_j` are unit vectors from the antennas to satellite `j` in the reference
-//! frame; baselines `b_i` are from the base antenna (antenna 0) to antenna `i` in body axes,
-//! metres. A range difference is `Δr_ij = ρ_0j − ρ_ij = b_iᵀ A s_j`.
+//! **Filters on baselines and Doppler velocity differences (paper 000)**, in ECEF:
+//! * [`direction_cosine`]: the corrected six-state model.
+//! * [`dcm_filter`]: its continuous EKF (eq. (10), RK4).
+//! * [`multi_structure`]: three of them on the three baseline pairs with a robust combination.
+//! * [`rigid_body`]: the three-parameter error-state filter on the same data, which the paper
+//!   does not have.
+//! * [`baseline_epoch`] holds their inputs and [`filter_estimate`] their output.
 
 pub mod ambiguity;
+pub mod baseline_epoch;
+pub mod dcm_filter;
+pub mod direction_cosine;
 pub mod eigen;
 pub mod example;
+pub mod filter_estimate;
+mod givens;
 mod integer_search;
 pub mod lambda;
+pub mod multi_structure;
 pub mod paper002;
 pub mod range_model;
+pub mod rigid_body;
 pub mod snapshot;
 pub mod wahba;

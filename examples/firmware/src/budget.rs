@@ -9,9 +9,14 @@ use core::hint::black_box;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m_semihosting::hprintln;
+use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
+use gnss_attitude::attitude::multi_structure::MultiStructureFilter;
+use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
+use gnss_attitude::geometry::{rot_x, rot_y, rot_z, Quaternion};
 use gnss_attitude::selftest::ConstantVelocityModel;
-use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector4};
+use nalgebra::{Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -68,6 +73,7 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
 pub fn run_all() {
     ekf_budgets();
     snapshot_budgets();
+    dcm_budgets();
 }
 
 fn ekf_budgets() {
@@ -152,4 +158,45 @@ fn resolve_once(
     phases: &gnss_attitude::attitude::ambiguity::PhaseObservations<2, 12>,
 ) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::AmbiguityError> {
     resolver.resolve(phases)
+}
+/// One step of each paper-000 filter on the paper's array (noise-free epoch near t = 1 s).
+fn dcm_budgets() {
+    let Ok(array) = AntennaArray::from_baselines(
+        &black_box(Vector3::new(1.5f32, 1.8, 1.9)),
+        &black_box(Vector3::new(1.7f32, 1.7, 2.0)),
+    ) else {
+        return;
+    };
+    let c0 = rot_z(black_box(0.1f32)) * rot_y(0.02) * rot_x(0.03);
+    let c1 = rot_z(black_box(0.1011f32)) * rot_y(0.0202) * rot_x(0.0301);
+    let mut epoch = BaselineEpoch::default();
+    for pair in BaselinePair::ALL {
+        let b = array.baseline(pair);
+        epoch.baselines[pair.index()] = Some(c1 * b);
+        epoch.velocity_differences[pair.index()] = Some((c1 - c0) * b / 0.01);
+    }
+    let config = DcmFilterConfig::paper(0.01f32, 0.6, 0.1);
+    let r0 = SMatrix::<f32, 6, 6>::identity() * 1e-4;
+    if let Ok(mut six) = DirectionCosineFilter::new(&array, config, &c0, &r0) {
+        let _ = measure("dcm six-state step (RK4 of eq. 10, Givens QR inverse x4, estimate)", || {
+            black_box(&mut six).step(black_box(&epoch)).is_ok()
+        });
+    }
+    if let Ok(mut multi) = MultiStructureFilter::new(&array, config, &c0, &r0) {
+        let _ = measure("dcm multi-structure step (3 six-state filters + combination)", || {
+            black_box(&mut multi).step(black_box(&epoch)).is_ok()
+        });
+    }
+    let rigid_config = RigidBodyConfig {
+        dt: 0.01f32,
+        sigma_baseline: 0.6,
+        sigma_velocity: 0.1,
+        gate: Some(GateConfidence::P999),
+    };
+    let q0 = Quaternion::from_dcm(&c0).unwrap_or_default();
+    if let Ok(mut rigid) = RigidBodyFilter::new(&array, rigid_config, &q0, &(Matrix3::identity() * 1e-4)) {
+        let _ = measure("dcm rigid-body step (LS rate, ekf3 predict, 3 gated 3-D updates)", || {
+            black_box(&mut rigid).step(black_box(&epoch)).is_ok()
+        });
+    }
 }

@@ -11,6 +11,11 @@
 use core::hint::black_box;
 
 use cortex_m_rt::entry;
+use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch};
+use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
+use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
+use gnss_attitude::attitude::multi_structure::{fuse, MultiStructureFilter};
+use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
 use gnss_attitude::selftest::run_ekf_self_test;
@@ -47,6 +52,7 @@ fn main() -> ! {
     let _ = black_box(q.normalize());
     let _ = black_box(run_ekf_self_test());
     snapshot_entry_points();
+    dcm_entry_points();
     loop {
         cortex_m::asm::nop();
     }
@@ -84,6 +90,49 @@ fn snapshot_entry_points() {
     }
     let pair = WahbaPair { body: v(1.0), reference: v(0.7), weight: black_box(1.0) };
     let _ = black_box(solve_wahba(&[pair, pair]));
+/// The paper-000 filters with opaque geometry, configuration and measurements.
+#[inline(never)]
+fn dcm_entry_points() {
+    let positions: [nalgebra::Vector3<f32>; 3] = black_box([nalgebra::Vector3::zeros(); 3]);
+    let Ok(array) = AntennaArray::new(positions) else {
+        return;
+    };
+    let epoch: BaselineEpoch<f32> = black_box(BaselineEpoch::default());
+    let c0: Matrix3<f32> = black_box(Matrix3::identity());
+    let r0: SMatrix<f32, 6, 6> = black_box(SMatrix::identity());
+    let columns = if black_box(true) { ColumnChoice::Paper } else { ColumnChoice::LargestNormal };
+    let config = DcmFilterConfig { columns, ..DcmFilterConfig::paper(black_box(0.01f32), black_box(0.6), black_box(0.1)) };
+    if let Ok(model) = DirectionCosineModel::new(&black_box(nalgebra::Vector3::x()), &black_box(nalgebra::Vector3::y()), columns) {
+        let y = black_box(SVector::<f32, 6>::zeros());
+        let _ = black_box(model.jacobian(&y));
+        let _ = black_box(model.jacobian_product(&y));
+        let _ = black_box(model.attitude_jacobian(&c0, &y));
+        let _ = black_box(model.observation(&y));
+        let _ = black_box(model.dcm(&y));
+        let _ = black_box(model.state_from_dcm(&c0));
+    }
+    if let Ok(mut six) = DirectionCosineFilter::new(&array, config, &c0, &r0) {
+        let _ = black_box(six.step(&epoch));
+        let _ = black_box(six.propagate(&epoch));
+        let _ = black_box(six.estimate());
+    }
+    if let Ok(mut multi) = MultiStructureFilter::new(&array, config, &c0, &r0) {
+        if let Ok(m) = multi.step(&epoch) {
+            let _ = black_box(fuse(&black_box(m.structures), &black_box([1.0f32, 2.0, 3.0])));
+        }
+    }
+    let rigid_config = RigidBodyConfig {
+        dt: black_box(0.01f32),
+        sigma_baseline: black_box(0.6),
+        sigma_velocity: black_box(0.1),
+        gate: black_box(Some(GateConfidence::P999)),
+    };
+    let q0 = black_box(Quaternion::identity());
+    if let Ok(mut rigid) = RigidBodyFilter::new(&array, rigid_config, &q0, &black_box(Matrix3::identity())) {
+        let _ = black_box(rigid.step(&epoch));
+    }
+    let antennas: [Option<nalgebra::Vector3<f32>>; 3] = black_box([None; 3]);
+    let _ = black_box(BaselineEpoch::from_antennas(&antennas, &antennas));
 }
 
 #[panic_handler]
