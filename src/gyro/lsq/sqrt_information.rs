@@ -1,0 +1,225 @@
+//! The square-root information accumulator: sequential Givens QR of the rows.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::{CalibrationError, Real};
+
+use super::{
+    check_row, check_tolerance, sigma0, singular_values, LeastSquaresAccumulator, LsqSolution,
+    ObservabilityReport,
+};
+
+/// Sequential least squares in square-root information form.
+///
+/// Holds the upper-triangular `R` (`X × X`) and `y = QᵀZ` of the QR factorization
+/// `U = Q [R; 0]`, and the residual sum of squares: every new row `(u, z)` is rotated into
+/// `[R | y]` by `X` Givens rotations (the row `u` is zeroed one element at a time), and what is
+/// left of `z` is the new residual. `RᵀR = UᵀU` and `Rᵀy = UᵀZ`, the quantities of the paper's
+/// eq. (5.8), are never formed, so the accuracy is that of QR (`κ(U) ε`), not of the normal
+/// equations (`κ(U)² ε`). Same memory as [`super::NormalEquations`].
+///
+/// The information it holds can be carried from one estimation window to the next with
+/// [`Self::marginalize`] and [`Self::shift_origin`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SqrtInformation<const X: usize, T = f32> {
+    r: SMatrix<T, X, X>,
+    y: SVector<T, X>,
+    rss: T,
+    rows: u32,
+}
+
+impl<const X: usize, T: Real> Default for SqrtInformation<X, T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const X: usize, T: Real> SqrtInformation<X, T> {
+    /// An empty accumulator (no information).
+    pub fn new() -> Self {
+        Self {
+            r: SMatrix::zeros(),
+            y: SVector::zeros(),
+            rss: T::zero(),
+            rows: 0,
+        }
+    }
+
+    /// The upper-triangular square-root information matrix `R` (`RᵀR = UᵀU`).
+    pub fn factor(&self) -> &SMatrix<T, X, X> {
+        &self.r
+    }
+
+    /// The rotated right-hand side `y = QᵀZ` (`R x̂ = y`).
+    pub fn rhs(&self) -> &SVector<T, X> {
+        &self.y
+    }
+
+    /// Residual sum of squares of the rows accumulated so far.
+    pub fn residual_sum_of_squares(&self) -> T {
+        self.rss
+    }
+
+    /// Rotates the row `(u, z)` into `[R | y]` (eq. (5.8) in square-root form). No checks.
+    fn rotate_in(&mut self, mut u: SVector<T, X>, mut z: T) {
+        for i in 0..X {
+            let b = u[i];
+            if b == T::zero() {
+                continue;
+            }
+            let a = self.r[(i, i)];
+            // Givens rotation [c s; −s c] zeroing u_i against R_ii: ρ = hypot(R_ii, u_i) > 0
+            let rho = a.hypot(b);
+            let (c, s) = (a / rho, b / rho);
+            self.r[(i, i)] = rho;
+            for j in (i + 1)..X {
+                let (rij, uj) = (self.r[(i, j)], u[j]);
+                self.r[(i, j)] = c * rij + s * uj;
+                u[j] = c * uj - s * rij;
+            }
+            let yi = self.y[i];
+            self.y[i] = c * yi + s * z;
+            z = c * z - s * yi;
+        }
+        // What is left of z is orthogonal to the range of U: one residual component.
+        self.rss += z * z;
+    }
+
+    /// Keeps only the information on the unknowns flagged in `keep`; the others are
+    /// marginalized (their information is dropped; they become free unknowns again, determined
+    /// only by rows added later).
+    ///
+    /// The factor is re-triangularized with the dropped unknowns first, and the rows of the
+    /// kept block are rotated into a fresh accumulator in the original order. With rows
+    /// involving the dropped unknowns only before the call, solving after new rows gives
+    /// exactly the least-squares solution of all rows. The residual sum of squares is kept;
+    /// the row count loses one row per dropped unknown (degrees of freedom are preserved).
+    pub fn marginalize(&self, keep: &[bool; X]) -> Self {
+        // perm[k] = original index of the k-th unknown in the order (dropped…, kept…)
+        let mut perm = [0usize; X];
+        let mut k = 0;
+        for want in [false, true] {
+            for (i, flag) in keep.iter().enumerate() {
+                if *flag == want {
+                    if let Some(slot) = perm.get_mut(k) {
+                        *slot = i;
+                    }
+                    k += 1;
+                }
+            }
+        }
+        let dropped = keep.iter().filter(|f| !**f).count();
+        let mut permuted = Self::new();
+        for i in 0..X {
+            let row = SVector::<T, X>::from_fn(|j, _| self.r[(i, perm[j])]);
+            permuted.rotate_in(row, self.y[i]);
+        }
+        let mut out = Self::new();
+        for i in dropped..X {
+            let mut row = SVector::<T, X>::zeros();
+            for (j, &orig) in perm.iter().enumerate() {
+                row[orig] = permuted.r[(i, j)];
+            }
+            out.rotate_in(row, permuted.y[i]);
+        }
+        out.rss = self.rss;
+        out.rows = self.rows.saturating_sub(dropped as u32);
+        out
+    }
+
+    /// Moves the linearization point: after the call the accumulator estimates `x − dx`
+    /// instead of `x` (`y ← y − R dx`). Use it after applying a correction `dx` to the model
+    /// (for example a gyro correction) whose residual is estimated next.
+    ///
+    /// # Errors
+    /// [`CalibrationError::NonFiniteInput`]; the accumulator is then unchanged.
+    pub fn shift_origin(&mut self, dx: &SVector<T, X>) -> Result<(), CalibrationError> {
+        if !dx.iter().all(|v| v.is_finite()) {
+            return Err(CalibrationError::NonFiniteInput);
+        }
+        let y = self.y - self.r * dx;
+        if !y.iter().all(|v| v.is_finite()) {
+            return Err(CalibrationError::InputOutOfRange);
+        }
+        self.y = y;
+        Ok(())
+    }
+}
+
+impl<const X: usize, T: Real> LeastSquaresAccumulator<T, X> for SqrtInformation<X, T> {
+    fn add_row(&mut self, u: &SVector<T, X>, z: T) -> Result<(), CalibrationError> {
+        check_row(u, z)?;
+        self.rotate_in(*u, z);
+        self.rows = self.rows.saturating_add(1);
+        Ok(())
+    }
+
+    fn rows(&self) -> u32 {
+        self.rows
+    }
+
+    fn observability(
+        &self,
+        rank_tolerance: T,
+    ) -> Result<ObservabilityReport<X, T>, CalibrationError> {
+        check_tolerance(rank_tolerance)?;
+        // The singular values of U are those of R (U = Q [R; 0]).
+        let s = singular_values(&self.r)?;
+        Ok(ObservabilityReport::from_singular_values(s, rank_tolerance))
+    }
+
+    fn solve(&self, rank_tolerance: T) -> Result<LsqSolution<X, T>, CalibrationError> {
+        let sigma0 = sigma0::<T, X>(self.rss, self.rows)?;
+        let observability = self.observability(rank_tolerance)?;
+        if !observability.full_rank() || (0..X).any(|i| self.r[(i, i)] == T::zero()) {
+            return Err(CalibrationError::Unobservable {
+                rank: observability.rank as u16,
+            });
+        }
+        // R x̂ = y by back substitution
+        let x = back_substitute(&self.r, &self.y);
+        // (UᵀU)⁻¹ = R⁻¹ R⁻ᵀ: var_i = Σ_k (R⁻¹)_ik², column k of R⁻¹ from R v = e_k
+        let mut var = SVector::<T, X>::zeros();
+        for k in 0..X {
+            let e = SVector::<T, X>::from_fn(|i, _| if i == k { T::one() } else { T::zero() });
+            let v = back_substitute(&self.r, &e);
+            for i in 0..X {
+                var[i] += v[i] * v[i];
+            }
+        }
+        let std_dev = var.map(|v| sigma0 * v.sqrt());
+        if !x.iter().chain(std_dev.iter()).all(|v| v.is_finite()) {
+            return Err(CalibrationError::Unobservable {
+                rank: observability.rank as u16,
+            });
+        }
+        Ok(LsqSolution {
+            x,
+            std_dev,
+            sigma0,
+            residual_sum_of_squares: self.rss,
+            rows: self.rows,
+            observability,
+        })
+    }
+
+    fn clear(&mut self) {
+        *self = Self::new();
+    }
+}
+
+/// Solves `R x = y` for upper-triangular `R` with a non-zero diagonal.
+fn back_substitute<T: Real, const X: usize>(
+    r: &SMatrix<T, X, X>,
+    y: &SVector<T, X>,
+) -> SVector<T, X> {
+    let mut x = SVector::<T, X>::zeros();
+    for i in (0..X).rev() {
+        let mut acc = y[i];
+        for j in (i + 1)..X {
+            acc -= r[(i, j)] * x[j];
+        }
+        x[i] = acc / r[(i, i)];
+    }
+    x
+}
