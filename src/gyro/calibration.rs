@@ -132,6 +132,28 @@ pub struct CalibrationEstimate<const CM: usize, const DN: usize, const X: usize,
     pub solution: LsqSolution<X, T>,
 }
 
+impl<const CM: usize, const DN: usize, const X: usize, T: Real> CalibrationEstimate<CM, DN, X, T> {
+    /// Compile-time check of `X = 3 + CM + DN`.
+    const DIMENSIONS_AGREE: () = assert!(X == 3 + CM + DN, "X must be 3 + CM + DN");
+
+    /// Splits a least-squares solution of `x = [w₀; c; d]` (from any accumulator holding a
+    /// calibrator's equations) into its parts.
+    pub fn from_solution(solution: LsqSolution<X, T>) -> Self {
+        let () = Self::DIMENSIONS_AGREE;
+        let x = &solution.x;
+        let s = &solution.std_dev;
+        Self {
+            w0: x.fixed_rows::<3>(0).into_owned(),
+            c: x.fixed_rows::<CM>(3).into_owned(),
+            d: x.fixed_rows::<DN>(3 + CM).into_owned(),
+            w0_std: s.fixed_rows::<3>(0).into_owned(),
+            c_std: s.fixed_rows::<CM>(3).into_owned(),
+            d_std: s.fixed_rows::<DN>(3 + CM).into_owned(),
+            solution,
+        }
+    }
+}
+
 /// In-flight gyro calibration against a reference attitude (paper 001).
 ///
 /// Feed it the gyro's increments (or pulse counts) every `h`, and at chosen epochs the
@@ -383,42 +405,33 @@ where
     /// (numerical rank below `X`), [`CalibrationError::TooFewRows`], and the other errors of
     /// [`LeastSquaresAccumulator::solve`].
     pub fn solve(&self) -> Result<CalibrationEstimate<CM, DN, X, T>, CalibrationError> {
+        let () = Self::DIMENSIONS_AGREE;
         let solution = self.accumulator.solve(self.config.rank_tolerance)?;
-        let x = &solution.x;
-        let s = &solution.std_dev;
-        Ok(CalibrationEstimate {
-            w0: x.fixed_rows::<3>(0).into_owned(),
-            c: x.fixed_rows::<CM>(3).into_owned(),
-            d: x.fixed_rows::<DN>(3 + CM).into_owned(),
-            w0_std: s.fixed_rows::<3>(0).into_owned(),
-            c_std: s.fixed_rows::<CM>(3).into_owned(),
-            d_std: s.fixed_rows::<DN>(3 + CM).into_owned(),
-            solution,
-        })
+        Ok(CalibrationEstimate::from_solution(solution))
     }
 
     /// The attitude at the current step corrected with `estimate` (gyro axes to the inertial
     /// frame `I`, the reference frame at `t₀`): `Λ̂ = (1 + ŵ) ∘ M` with
-    /// `ŵ = ŵ₀ − ½ Ψ_anchor d̂ − ½ Θ(t) ĉ` (eq. (2.4), the anchor term referring the attitude
-    /// back to the reference frame). With the centering of eq. (5.5), `M` is first advanced by
-    /// the mean quantization residual, `(1 − μ(q_K)) ∘ M = (1 + ¼ σ Bᵀ ρ*) ∘ M`.
+    /// `ŵ = ŵ₀ − ½ Ψ_anchor d̂ − ½ Θ(t) ĉ` (eq. (2.4); the anchor term refers the attitude back
+    /// to the reference frame when the drift model has one).
+    ///
+    /// `M` is the computed attitude as integrated, also with the centering of eq. (5.5): the
+    /// quantization lag of `M` is not the local `−¼ σ Bᵀ(t) ρ*` that (5.5) removes from the
+    /// equations but, without sign changes of the rates, the lag `a = −¼ σ Bᵀ(t₁) ρ*` fixed
+    /// in `K` at the first sample (the "accumulated non-commutativity" the paper neglects).
+    /// The difference leaves in each equation `[p₀E₃ − Φ(p)](E₃ − C(P)) a = −2 Φ(p) a`, exactly
+    /// a `w₀` column: ĉ and d̂ are unaffected and `ŵ₀` absorbs `−a`, which cancels the lag of
+    /// `M`, so `(1 + ŵ) ∘ M` is the corrected attitude.
     pub fn corrected_attitude(
         &self,
         estimate: &CalibrationEstimate<CM, DN, X, T>,
     ) -> Quaternion<T> {
         let half: T = real(0.5);
-        let mut m = self.propagator.attitude();
-        if let Some(dec) = &self.decoder {
-            if dec.centering() == ResidualCentering::MeanResidual {
-                let rho = Vector3::from_fn(|i, _| real::<T>(f64::from(dec.last_signs()[i])));
-                let lag = m.to_dcm() * rho * (real::<T>(0.25) * dec.sigma()); // half-angle
-                m = Quaternion::from_rotation_vector(&(lag * real::<T>(2.0))) * m;
-            }
-        }
         let w = estimate.w0
             - self.drift.psi_anchor() * estimate.d * half
             - self.quadratures.theta() * estimate.c * half;
-        let q = Quaternion::from_rotation_vector(&(w * real::<T>(2.0))) * m;
+        let q =
+            Quaternion::from_rotation_vector(&(w * real::<T>(2.0))) * self.propagator.attitude();
         q.normalize().unwrap_or(q)
     }
 

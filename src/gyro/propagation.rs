@@ -29,11 +29,22 @@ pub struct PropagationStep<T = f32> {
 
 /// The computed attitude `M` (gyro axes to the computed frame `K`, Hamilton, `q_KE`),
 /// advanced by pairs of gyro increments.
+///
+/// `M` is kept as `M_a ∘ Δ`: an anchor `M_a` and the rotation `Δ` since the anchor, into which
+/// the steps are composed. `Δ` stays within [`FOLD_ANGLE`] of the identity, where the
+/// rounding of its vector part is `ε |Δ|` instead of `ε`; it is folded into the anchor only
+/// every [`FOLD_ANGLE`] of rotation. In `f32` this makes the propagated attitude about ten
+/// times more accurate than composing every step into `M` (whose components are `O(1)`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AttitudePropagator<T = f32> {
-    q: Quaternion<T>,
+    anchor: Quaternion<T>,
+    delta: Quaternion<T>,
     pending: Option<Vector3<T>>,
 }
+
+/// Rotation (rad) accumulated in the near-identity part of [`AttitudePropagator`] before it is
+/// folded into the anchor.
+pub const FOLD_ANGLE: f64 = 0.125;
 
 impl<T: Real> AttitudePropagator<T> {
     /// A propagator at the attitude `m0` (normalized here).
@@ -48,12 +59,17 @@ impl<T: Real> AttitudePropagator<T> {
         let q = m0
             .normalize()
             .map_err(|_| CalibrationError::InputOutOfRange)?;
-        Ok(Self { q, pending: None })
+        Ok(Self {
+            anchor: q,
+            delta: Quaternion::identity(),
+            pending: None,
+        })
     }
 
     /// The computed attitude `M` at the last completed step.
     pub fn attitude(&self) -> Quaternion<T> {
-        self.q
+        let m = self.anchor * self.delta;
+        m.normalize().unwrap_or(m)
     }
 
     /// True when the first sample of a step is waiting for its second.
@@ -80,9 +96,15 @@ impl<T: Real> AttitudePropagator<T> {
             }
             Some(first) => {
                 let phi = two_sample_rotation_vector(&first, theta);
-                // eq. (1.1) over H: M(t + H) = M(t) ∘ exp(φ), renormalized against rounding
-                let next = self.q * Quaternion::from_rotation_vector(&phi);
-                self.q = next.normalize().unwrap_or(next);
+                // eq. (1.1) over H: M(t + H) = M(t) ∘ exp(φ), i.e. Δ ← Δ ∘ exp(φ), renormalized
+                let next = self.delta * Quaternion::from_rotation_vector(&phi);
+                self.delta = next.normalize().unwrap_or(next);
+                // sin²(FOLD_ANGLE / 2) ≈ (FOLD_ANGLE / 2)²
+                let fold = real::<T>(FOLD_ANGLE * FOLD_ANGLE / 4.0);
+                if self.delta.vector().norm_squared() > fold {
+                    self.anchor = self.attitude();
+                    self.delta = Quaternion::identity();
+                }
                 Ok(Some(PropagationStep {
                     increment: first + theta,
                     rotation_vector: phi,

@@ -4,4 +4,5 @@
 //! estimators of the core are compared against is not limited by f32 or shares their
 //! approximations.
 
+pub mod gyro;
 pub mod kinematics;
