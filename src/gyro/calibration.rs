@@ -240,9 +240,7 @@ where
         })
     }
 
-    /// Applies a known gyro correction `c_applied` to every increment before integration:
-    /// `θ ← θ* − D(θ*/h) h c_applied` (first order in `c`). The estimate `ĉ` is then the
-    /// residual error, `c ≈ c_applied + ĉ`.
+    /// Starts with the gyro correction `c_applied` (see [`Self::set_gyro_correction`]).
     ///
     /// # Errors
     /// [`CalibrationError::NonFiniteInput`].
@@ -250,11 +248,33 @@ where
         mut self,
         c_applied: SVector<T, CM>,
     ) -> Result<Self, CalibrationError> {
+        self.set_gyro_correction(c_applied)?;
+        Ok(self)
+    }
+
+    /// Corrects every following increment with the gyro error `c_applied` before integration:
+    /// `θ ← θ* − D(θ*/h) h c_applied` (first order in `c`). May be called at any step boundary,
+    /// typically with the latest estimate `ĉ` ("re-linearization"): the computed attitude then
+    /// stays close to the truth, so that the first-order model (2.4) stays valid over long
+    /// windows. The unknown remains the *total* gyro error `c`: the calibrator integrates the
+    /// applied correction, `K(t) = ∫ Bᵀ D c_applied dt`, and the equations become
+    /// `U x = z + Γ K` (from `w = w₀ − ½ Θ c + ½ K`).
+    ///
+    /// # Errors
+    /// [`CalibrationError::NonFiniteInput`]; [`CalibrationError::MidStep`] between the two
+    /// samples of a step. The calibrator is then unchanged.
+    pub fn set_gyro_correction(
+        &mut self,
+        c_applied: SVector<T, CM>,
+    ) -> Result<(), CalibrationError> {
         if !c_applied.iter().all(|v| v.is_finite()) {
             return Err(CalibrationError::NonFiniteInput);
         }
+        if self.propagator.mid_step() {
+            return Err(CalibrationError::MidStep);
+        }
         self.correction = c_applied;
-        Ok(self)
+        Ok(())
     }
 
     /// Takes one float gyro increment `θ` (rad, gyro axes) over the sample interval `h`.
@@ -274,8 +294,13 @@ where
             // eq. (2.4) integrand at the step's end: Bᵀ = DCM of M, D(ω*) H from the increments
             let d_dt = self.model.increment_error_matrix(&step.increment, big_h);
             let g = self.drift.g(elapsed);
-            self.quadratures
-                .step(&self.propagator.attitude().to_dcm(), &d_dt, &g, big_h);
+            self.quadratures.step(
+                &self.propagator.attitude().to_dcm(),
+                &d_dt,
+                &g,
+                big_h,
+                &self.correction,
+            );
         }
         self.samples += 1;
         Ok(())
@@ -328,8 +353,8 @@ where
         let half: T = real(0.5);
         let p0_minus_phi = Matrix3::identity() * p0 - phi; // [p₀E₃ − Φ(p)]
         let gamma = p0_minus_phi * half; // Γ = ½ [p₀E₃ − Φ(p)], eq. (5.7)
-                                         // z = p* − p (eq. (2.7) right-hand side)
-        let mut rhs = p_star.vector() - pv;
+                                         // z = p* − p (eq. (2.7) right-hand side), plus Γ K for the gyro correction applied
+        let mut rhs = p_star.vector() - pv + gamma * self.quadratures.correction_integral();
         if let Some(dec) = &self.decoder {
             if dec.centering() == ResidualCentering::MeanResidual {
                 // eq. (5.5): z' = p' − p + ¼ σ [p₀E₃ − Φ(p)] Bᵀ ρ*
@@ -412,8 +437,9 @@ where
 
     /// The attitude at the current step corrected with `estimate` (gyro axes to the inertial
     /// frame `I`, the reference frame at `t₀`): `Λ̂ = (1 + ŵ) ∘ M` with
-    /// `ŵ = ŵ₀ − ½ Ψ_anchor d̂ − ½ Θ(t) ĉ` (eq. (2.4); the anchor term refers the attitude back
-    /// to the reference frame when the drift model has one).
+    /// `ŵ = ŵ₀ − ½ Ψ_anchor d̂ − ½ (Θ(t) ĉ − K(t))` (eq. (2.4); `K` the integral of the gyro
+    /// correction already applied, the anchor term refers the attitude back to the reference
+    /// frame when the drift model has one).
     ///
     /// `M` is the computed attitude as integrated, also with the centering of eq. (5.5): the
     /// quantization lag of `M` is not the local `−¼ σ Bᵀ(t) ρ*` that (5.5) removes from the
@@ -427,9 +453,9 @@ where
         estimate: &CalibrationEstimate<CM, DN, X, T>,
     ) -> Quaternion<T> {
         let half: T = real(0.5);
-        let w = estimate.w0
-            - self.drift.psi_anchor() * estimate.d * half
-            - self.quadratures.theta() * estimate.c * half;
+        let w = estimate.w0 - self.drift.psi_anchor() * estimate.d * half
+            + (self.quadratures.correction_integral() - self.quadratures.theta() * estimate.c)
+                * half;
         let q =
             Quaternion::from_rotation_vector(&(w * real::<T>(2.0))) * self.propagator.attitude();
         q.normalize().unwrap_or(q)
@@ -464,6 +490,12 @@ where
     /// window).
     pub fn into_accumulator(self) -> A {
         self.accumulator
+    }
+
+    /// `K(t)`, the integral of the gyro correction applied so far (see
+    /// [`Self::set_gyro_correction`]).
+    pub fn correction_integral(&self) -> &Vector3<T> {
+        self.quadratures.correction_integral()
     }
 
     /// The gyro correction applied to the increments.

@@ -8,7 +8,7 @@
 //!   `w(t) = w₀ − ½ Θ(t) c`, `Θ(t) = ∫_{t₀}^t Bᵀ D(ω*) dt`, accumulated by
 //!   [`ErrorQuadratures`] with the trapezoid rule at the propagation step `H`.
 
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::Real;
 
@@ -139,6 +139,7 @@ impl<T: Real> ReferenceDriftModel<T, 6> for AnchorErrorAndDrift {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ErrorQuadratures<const CM: usize, const DN: usize, T = f32> {
     theta: SMatrix<T, 3, CM>,
+    correction_integral: Vector3<T>,
     g_integral: SMatrix<T, 3, DN>,
     bt_prev: Matrix3<T>,
     g_prev: SMatrix<T, 3, DN>,
@@ -149,24 +150,30 @@ impl<const CM: usize, const DN: usize, T: Real> ErrorQuadratures<CM, DN, T> {
     pub fn new(bt0: Matrix3<T>, g0: SMatrix<T, 3, DN>) -> Self {
         Self {
             theta: SMatrix::zeros(),
+            correction_integral: Vector3::zeros(),
             g_integral: SMatrix::zeros(),
             bt_prev: bt0,
             g_prev: g0,
         }
     }
 
-    /// Advances both integrals over one step of `h_step` seconds, at whose end the computed
-    /// attitude has DCM `bt` and the drift model `G = g`; `d_dt = D(θ/H) H` of the step.
+    /// Advances the integrals over one step of `h_step` seconds, at whose end the computed
+    /// attitude has DCM `bt` and the drift model `G = g`; `d_dt = D(θ/H) H` of the step and
+    /// `correction` the gyro correction applied over it.
     pub fn step(
         &mut self,
         bt: &Matrix3<T>,
         d_dt: &SMatrix<T, 3, CM>,
         g: &SMatrix<T, 3, DN>,
         h_step: T,
+        correction: &SVector<T, CM>,
     ) {
         let half: T = crate::real(0.5);
-        // eq. (2.4), trapezoid: Θ += ½ (Bᵀ_{k−1} + Bᵀ_k) D(ω*) H
-        self.theta += (self.bt_prev + bt) * d_dt * half;
+        // eq. (2.4), trapezoid: ΔΘ = ½ (Bᵀ_{k−1} + Bᵀ_k) D(ω*) H
+        let d_theta = (self.bt_prev + bt) * d_dt * half;
+        self.theta += d_theta;
+        // the same quadrature of the applied correction: K += ΔΘ c_applied
+        self.correction_integral += d_theta * correction;
         // eq. (2.2), trapezoid: ∫G += ½ (G_{k−1} + G_k) H
         self.g_integral += (self.g_prev + g) * (half * h_step);
         self.bt_prev = *bt;
@@ -176,6 +183,13 @@ impl<const CM: usize, const DN: usize, T: Real> ErrorQuadratures<CM, DN, T> {
     /// `Θ(t)` (`3 × CM`): attitude error in the computed frame per unit of `c`, times −2.
     pub fn theta(&self) -> &SMatrix<T, 3, CM> {
         &self.theta
+    }
+
+    /// `K(t) = ∫_{t₀}^t Bᵀ D(ω*) c_applied dt` (rad, half-angle × 2, frame `K`): the part of
+    /// `Θ c` that the gyro correction applied so far has already removed (`K = Θ c_applied`
+    /// while the correction is constant).
+    pub fn correction_integral(&self) -> &Vector3<T> {
+        &self.correction_integral
     }
 
     /// `∫_{t₀}^t G dt` (`3 × DN`), without the anchor term.

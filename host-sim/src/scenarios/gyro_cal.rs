@@ -181,6 +181,7 @@ fn solution_as<T: Real, U: Real>(s: &LsqSolution<15, U>) -> LsqSolution<15, T> {
             singular_values: s.observability.singular_values.map(|v| c(to_f64(v))),
             rank: s.observability.rank,
             condition: c(to_f64(s.observability.condition)),
+            equilibrated_condition: c(to_f64(s.observability.equilibrated_condition)),
         },
     }
 }

@@ -6,3 +6,4 @@
 
 pub mod gyro;
 pub mod kinematics;
+pub mod tumble;

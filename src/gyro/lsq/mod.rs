@@ -77,38 +77,43 @@ pub trait LeastSquaresAccumulator<T: Real, const X: usize> {
 }
 
 /// The default relative rank tolerance, `√ε` of the scalar type: `3.5·10⁻⁴` in `f32` (systems
-/// with a condition number above about 2900 are called rank deficient), `1.5·10⁻⁸` in `f64`.
+/// whose column-equilibrated condition number exceeds about 2900 are called rank deficient),
+/// `1.5·10⁻⁸` in `f64`.
 pub fn default_rank_tolerance<T: Real>() -> T {
     T::default_epsilon().sqrt()
 }
 
 /// How well the accumulated system determines the unknowns.
+///
+/// The unknowns have different units (rad, s⁻¹, dimensionless), so the rank is decided on the
+/// column-equilibrated system `U D⁻¹` (`D = diag ‖u_j‖`, each column scaled to unit norm),
+/// which does not depend on the units; the condition number of `U` itself is reported too
+/// (the paper's §6 figure).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ObservabilityReport<const X: usize, T = f32> {
     /// Singular values of `U` in descending order (units of the rows).
     pub singular_values: SVector<T, X>,
-    /// Number of singular values above `rank_tolerance × σ_max`.
+    /// Number of singular values of `U D⁻¹` above `rank_tolerance × σ_max(U D⁻¹)`.
     pub rank: usize,
     /// Condition number `σ_max / σ_min` of `U` (the largest finite value of `T` when
     /// `σ_min = 0`).
     pub condition: T,
+    /// Condition number of the column-equilibrated `U D⁻¹`.
+    pub equilibrated_condition: T,
 }
 
 impl<const X: usize, T: Real> ObservabilityReport<X, T> {
-    /// The report for the singular values `s` (descending) of `U`.
-    pub(crate) fn from_singular_values(s: SVector<T, X>, rank_tolerance: T) -> Self {
-        let s_max = s.max();
-        let s_min = s.min();
-        let rank = s.iter().filter(|v| **v > rank_tolerance * s_max).count();
-        let condition = if s_min > T::zero() {
-            s_max / s_min
-        } else {
-            T::max_value().unwrap_or_else(|| real(f64::from(f32::MAX)))
-        };
+    /// The report for the singular values `s` of `U` and `s_eq` of `U D⁻¹`.
+    pub(crate) fn new(s: SVector<T, X>, s_eq: SVector<T, X>, rank_tolerance: T) -> Self {
+        let rank = s_eq
+            .iter()
+            .filter(|v| **v > rank_tolerance * s_eq.max())
+            .count();
         Self {
             singular_values: s,
             rank,
-            condition,
+            condition: condition(&s),
+            equilibrated_condition: condition(&s_eq),
         }
     }
 
@@ -116,6 +121,26 @@ impl<const X: usize, T: Real> ObservabilityReport<X, T> {
     pub fn full_rank(&self) -> bool {
         self.rank == X
     }
+}
+
+fn condition<T: Real, const X: usize>(s: &SVector<T, X>) -> T {
+    let s_min = s.min();
+    if s_min > T::zero() {
+        s.max() / s_min
+    } else {
+        T::max_value().unwrap_or_else(|| real(f64::from(f32::MAX)))
+    }
+}
+
+/// `1 / d` for the column scales `d` (1 for a zero column, which stays zero).
+pub(crate) fn inverse_scales<T: Real, const X: usize>(d: &SVector<T, X>) -> SVector<T, X> {
+    d.map(|v| {
+        if v > T::zero() {
+            T::one() / v
+        } else {
+            T::one()
+        }
+    })
 }
 
 /// A least-squares solution.

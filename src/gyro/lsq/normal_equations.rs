@@ -5,8 +5,8 @@ use nalgebra::{Cholesky, SMatrix, SVector};
 use crate::{CalibrationError, Real};
 
 use super::{
-    check_row, check_tolerance, sigma0, singular_values, LeastSquaresAccumulator, LsqSolution,
-    ObservabilityReport,
+    check_row, check_tolerance, inverse_scales, sigma0, singular_values, LeastSquaresAccumulator,
+    LsqSolution, ObservabilityReport,
 };
 
 /// Sequential least squares by the normal equations, as the paper accumulates them (eq. (5.8)):
@@ -85,9 +85,14 @@ impl<const X: usize, T: Real> LeastSquaresAccumulator<T, X> for NormalEquations<
         rank_tolerance: T,
     ) -> Result<ObservabilityReport<X, T>, CalibrationError> {
         check_tolerance(rank_tolerance)?;
-        // singular values of the symmetric UᵀU are |eigenvalues| = σ_i(U)²
-        let s = singular_values(&self.normal_matrix())?.map(|v| v.sqrt());
-        Ok(ObservabilityReport::from_singular_values(s, rank_tolerance))
+        // singular values of the symmetric UᵀU are |eigenvalues| = σ_i(U)²; ‖u_j‖² = N_jj
+        let n = self.normal_matrix();
+        let s = singular_values(&n)?.map(|v| v.sqrt());
+        let scale = SMatrix::from_diagonal(&inverse_scales(
+            &n.diagonal().map(|v| v.max(T::zero()).sqrt()),
+        ));
+        let s_eq = singular_values(&(scale * n * scale))?.map(|v| v.sqrt());
+        Ok(ObservabilityReport::new(s, s_eq, rank_tolerance))
     }
 
     fn solve(&self, rank_tolerance: T) -> Result<LsqSolution<X, T>, CalibrationError> {

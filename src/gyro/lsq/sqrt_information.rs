@@ -5,8 +5,8 @@ use nalgebra::{SMatrix, SVector};
 use crate::{CalibrationError, Real};
 
 use super::{
-    check_row, check_tolerance, sigma0, singular_values, LeastSquaresAccumulator, LsqSolution,
-    ObservabilityReport,
+    check_row, check_tolerance, inverse_scales, sigma0, singular_values, LeastSquaresAccumulator,
+    LsqSolution, ObservabilityReport,
 };
 
 /// Sequential least squares in square-root information form.
@@ -163,9 +163,11 @@ impl<const X: usize, T: Real> LeastSquaresAccumulator<T, X> for SqrtInformation<
         rank_tolerance: T,
     ) -> Result<ObservabilityReport<X, T>, CalibrationError> {
         check_tolerance(rank_tolerance)?;
-        // The singular values of U are those of R (U = Q [R; 0]).
+        // The singular values of U are those of R (U = Q [R; 0]); ‖u_j‖ = ‖r_j‖.
         let s = singular_values(&self.r)?;
-        Ok(ObservabilityReport::from_singular_values(s, rank_tolerance))
+        let scale = inverse_scales(&SVector::<T, X>::from_fn(|j, _| self.r.column(j).norm()));
+        let s_eq = singular_values(&(self.r * SMatrix::from_diagonal(&scale)))?;
+        Ok(ObservabilityReport::new(s, s_eq, rank_tolerance))
     }
 
     fn solve(&self, rank_tolerance: T) -> Result<LsqSolution<X, T>, CalibrationError> {
