@@ -84,7 +84,7 @@ pub use lsq::{
 };
 pub use propagation::{
     two_sample_rotation_vector, AttitudePropagator, PropagationStep, PulseDecoder,
-    ResidualCentering,
+    ResidualCentering, FOLD_ANGLE,
 };
 
 use crate::geometry::Quaternion;

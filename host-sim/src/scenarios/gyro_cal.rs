@@ -14,7 +14,7 @@
 //! Variant `gnss-ref` ([`super::gyro_cal_gnss`]): a tumbling microsatellite, a MEMS gyro and a
 //! GNSS-like reference attitude (white noise 0.05° per axis at 10 Hz) over 10 minutes.
 //!
-//! Metrics (§6 variants): `dc` [9], `dd` [3], `w_post` [3] (the post-correction attitude error,
+//! Metrics (§6 variants): `dc` (9), `dd` (3), `w_post` (3) (the post-correction attitude error,
 //! half-angle vector), `rank`, `cond` of the f32 Givens solve; `dc_f64`, `dd_f64`,
 //! `w_post_f64` of the f64 solve of the same equations; `*_normal_f32` of the f32 normal
 //! equations; `givens_f32_dev_ratio` and `normal_f32_dev_ratio`, the largest over the groups

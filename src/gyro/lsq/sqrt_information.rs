@@ -18,8 +18,9 @@ use super::{
 /// eq. (5.8), are never formed, so the accuracy is that of QR (`κ(U) ε`), not of the normal
 /// equations (`κ(U)² ε`). Same memory as [`super::NormalEquations`].
 ///
-/// The information it holds can be carried from one estimation window to the next with
-/// [`Self::marginalize`] and [`Self::shift_origin`].
+/// The information it holds on some unknowns can be carried from one estimation window to the
+/// next with [`Self::marginalize`] (for example the gyro errors `c`, when a long calibration is
+/// re-anchored on a new reference epoch and `w₀` starts afresh).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SqrtInformation<const X: usize, T = f32> {
     r: SMatrix<T, X, X>,
@@ -126,24 +127,6 @@ impl<const X: usize, T: Real> SqrtInformation<X, T> {
         out.rows = self.rows.saturating_sub(dropped as u32);
         out
     }
-
-    /// Moves the linearization point: after the call the accumulator estimates `x − dx`
-    /// instead of `x` (`y ← y − R dx`). Use it after applying a correction `dx` to the model
-    /// (for example a gyro correction) whose residual is estimated next.
-    ///
-    /// # Errors
-    /// [`CalibrationError::NonFiniteInput`]; the accumulator is then unchanged.
-    pub fn shift_origin(&mut self, dx: &SVector<T, X>) -> Result<(), CalibrationError> {
-        if !dx.iter().all(|v| v.is_finite()) {
-            return Err(CalibrationError::NonFiniteInput);
-        }
-        let y = self.y - self.r * dx;
-        if !y.iter().all(|v| v.is_finite()) {
-            return Err(CalibrationError::InputOutOfRange);
-        }
-        self.y = y;
-        Ok(())
-    }
 }
 
 impl<const X: usize, T: Real> LeastSquaresAccumulator<T, X> for SqrtInformation<X, T> {
@@ -224,4 +207,62 @@ fn back_substitute<T: Real, const X: usize>(
         x[i] = acc / r[(i, i)];
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::SVector;
+
+    fn row(seed: u32) -> SVector<f64, 4> {
+        // a small LCG: rows in general position
+        SVector::from_fn(|i, _| {
+            let x = (seed * 4 + i as u32)
+                .wrapping_mul(1_103_515_245)
+                .wrapping_add(12_345);
+            f64::from(x >> 8) / f64::from(1u32 << 24) - 0.5
+        })
+    }
+
+    #[test]
+    fn marginalizing_a_nuisance_gives_the_joint_solution() {
+        // Unknowns [a, b, c, d]; window 1 involves all four; window 2 only b, c, d plus a new
+        // nuisance that re-uses slot a. Marginalizing a after window 1 must give exactly the
+        // least-squares solution of both windows with two separate nuisances.
+        let truth = SVector::<f64, 4>::new(0.5, -1.0, 2.0, 0.25);
+        let a2 = -0.75; // the second window's nuisance
+        let mut joint = SqrtInformation::<5, f64>::new(); // [a1, b, c, d, a2]
+        let mut first = SqrtInformation::<4, f64>::new();
+        for k in 0..20 {
+            let u = row(k);
+            let z = u.dot(&truth) + 1e-3 * f64::from(k).cos();
+            first.add_row(&u, z).unwrap();
+            let uj = SVector::<f64, 5>::new(u[0], u[1], u[2], u[3], 0.0);
+            joint.add_row(&uj, z).unwrap();
+        }
+        let mut second = first.marginalize(&[false, true, true, true]);
+        for k in 20..40 {
+            let u = row(k);
+            let z = u[0] * a2
+                + u[1] * truth[1]
+                + u[2] * truth[2]
+                + u[3] * truth[3]
+                + 1e-3 * f64::from(k).sin();
+            second.add_row(&u, z).unwrap();
+            let uj = SVector::<f64, 5>::new(0.0, u[1], u[2], u[3], u[0]);
+            joint.add_row(&uj, z).unwrap();
+        }
+        let s = second.solve(1e-10).unwrap();
+        let j = joint.solve(1e-10).unwrap();
+        for i in 1..4 {
+            assert!(
+                (s.x[i] - j.x[i]).abs() < 1e-12,
+                "{i}: {} vs {}",
+                s.x[i],
+                j.x[i]
+            );
+            assert!((s.std_dev[i] - j.std_dev[i]).abs() < 1e-12 * j.std_dev[i].max(1.0));
+        }
+        assert!((s.x[0] - j.x[4]).abs() < 1e-12);
+    }
 }
