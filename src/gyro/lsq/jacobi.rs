@@ -51,11 +51,15 @@ pub fn singular_values<T: Real, const X: usize>(
                 {
                     continue;
                 }
-                rotated = true;
-                // ζ = (β − α) / 2γ ; t = sign ζ / (|ζ| + √(1 + ζ²)) makes the pair orthogonal
+                // ζ = (β − α) / 2γ ; t = sign ζ / (|ζ| + √(1 + ζ²)) makes the pair orthogonal.
+                // A ζ so large that ζ² overflows gives t = 0: a rotation below resolution.
                 let zeta = (beta - alpha) / (two * gamma);
-                let t = zeta.signum() / (zeta.abs() + T::one().hypot(zeta));
-                let c = T::one() / T::one().hypot(t);
+                let t = zeta.signum() / (zeta.abs() + (T::one() + zeta * zeta).sqrt());
+                if !(t.abs() > T::zero()) {
+                    continue;
+                }
+                rotated = true;
+                let c = T::one() / (T::one() + t * t).sqrt();
                 let s = c * t;
                 for i in 0..X {
                     let (x, y) = (a[(i, p)], a[(i, q)]);

@@ -69,8 +69,13 @@ impl<const X: usize, T: Real> SqrtInformation<X, T> {
                 continue;
             }
             let a = self.r[(i, i)];
-            // Givens rotation [c s; −s c] zeroing u_i against R_ii: ρ = hypot(R_ii, u_i) > 0
-            let rho = a.hypot(b);
+            // Givens rotation [c s; −s c] zeroing u_i against R_ii: ρ = √(R_ii² + u_i²). The
+            // inputs are bounded by MAX_ROW_ENTRY, so the squares cannot overflow; a ρ that
+            // underflows to 0 means u_i is negligible, and it is dropped.
+            let rho = (a * a + b * b).sqrt();
+            if !(rho > T::zero()) {
+                continue;
+            }
             let (c, s) = (a / rho, b / rho);
             self.r[(i, i)] = rho;
             for j in (i + 1)..X {
