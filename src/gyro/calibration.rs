@@ -140,15 +140,17 @@ impl<const CM: usize, const DN: usize, const X: usize, T: Real> CalibrationEstim
     /// calibrator's equations) into its parts.
     pub fn from_solution(solution: LsqSolution<X, T>) -> Self {
         let () = Self::DIMENSIONS_AGREE;
-        let x = &solution.x;
-        let s = &solution.std_dev;
+        let (x, s) = (&solution.x, &solution.std_dev);
+        // element-wise copies (no view-to-owned conversion, whose length check could panic)
+        let part =
+            |v: &SVector<T, X>, at: usize, i: usize| v.get(at + i).copied().unwrap_or(T::zero());
         Self {
-            w0: x.fixed_rows::<3>(0).into_owned(),
-            c: x.fixed_rows::<CM>(3).into_owned(),
-            d: x.fixed_rows::<DN>(3 + CM).into_owned(),
-            w0_std: s.fixed_rows::<3>(0).into_owned(),
-            c_std: s.fixed_rows::<CM>(3).into_owned(),
-            d_std: s.fixed_rows::<DN>(3 + CM).into_owned(),
+            w0: Vector3::from_fn(|i, _| part(x, 0, i)),
+            c: SVector::from_fn(|i, _| part(x, 3, i)),
+            d: SVector::from_fn(|i, _| part(x, 3 + CM, i)),
+            w0_std: Vector3::from_fn(|i, _| part(s, 0, i)),
+            c_std: SVector::from_fn(|i, _| part(s, 3, i)),
+            d_std: SVector::from_fn(|i, _| part(s, 3 + CM, i)),
             solution,
         }
     }

@@ -117,14 +117,19 @@ impl<const X: usize, T: Real> SqrtInformation<X, T> {
         let dropped = keep.iter().filter(|f| !**f).count();
         let mut permuted = Self::new();
         for i in 0..X {
-            let row = SVector::<T, X>::from_fn(|j, _| self.r[(i, perm[j])]);
+            let row = SVector::<T, X>::from_fn(|j, _| {
+                let col = perm.get(j).copied().unwrap_or(j);
+                self.r.get((i, col)).copied().unwrap_or(T::zero())
+            });
             permuted.rotate_in(row, self.y[i]);
         }
         let mut out = Self::new();
         for i in dropped..X {
             let mut row = SVector::<T, X>::zeros();
             for (j, &orig) in perm.iter().enumerate() {
-                row[orig] = permuted.r[(i, j)];
+                if let Some(slot) = row.get_mut(orig) {
+                    *slot = permuted.r[(i, j)];
+                }
             }
             out.rotate_in(row, permuted.y[i]);
         }
