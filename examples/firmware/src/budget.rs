@@ -10,12 +10,12 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m_semihosting::hprintln;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
+use gnss_attitude::selftest::ConstantVelocityModel;
 use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::gyro::{
     default_rank_tolerance, CalibratorConfig, EpochOutcome, LeastSquaresAccumulator,
     NormalEquations, PaperCalibrator, SqrtInformation,
 };
-use gnss_attitude::selftest::ConstantVelocityModel;
 use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
 static REGION: AtomicU32 = AtomicU32::new(0);
@@ -82,13 +82,11 @@ fn ekf_budgets() {
         Err(_) => return,
     };
     let z = Vector2::new(1.1, 1.9);
-    let _ = measure(
-        "ekf4 predict+update2 (constant velocity, Joseph, gated)",
-        || model.step(black_box(&mut cv), black_box(&z)).is_ok(),
-    );
+    let _ = measure("ekf4 predict+update2 (constant velocity, Joseph, gated)", || {
+        model.step(black_box(&mut cv), black_box(&z)).is_ok()
+    });
 
-    let p0 =
-        SMatrix::<f32, 6, 6>::from_diagonal(&SVector::from([1e-2, 1e-2, 1e-2, 1e-4, 1e-4, 1e-4]));
+    let p0 = SMatrix::<f32, 6, 6>::from_diagonal(&SVector::from([1e-2, 1e-2, 1e-2, 1e-4, 1e-4, 1e-4]));
     let mut six = match Ekf::<6>::new(SVector::zeros(), p0) {
         Ok(k) => k,
         Err(_) => return,
@@ -96,30 +94,18 @@ fn ekf_budgets() {
     let mut f = SMatrix::<f32, 6, 6>::identity();
     f.fixed_view_mut::<3, 3>(0, 3).fill_with_identity();
     let q = SMatrix::<f32, 6, 6>::identity() * 1e-8;
-    let h = SMatrix::<f32, 3, 6>::from_fn(|i, j| {
-        if j < 3 {
-            (i as f32 + 2.0 * j as f32) * 0.1 - 0.2
-        } else {
-            0.0
-        }
-    });
+    let h = SMatrix::<f32, 3, 6>::from_fn(|i, j| if j < 3 { (i as f32 + 2.0 * j as f32) * 0.1 - 0.2 } else { 0.0 });
     let r = SMatrix::<f32, 3, 3>::identity() * 1e-4;
     let y = SVector::<f32, 3>::new(1e-3, -2e-3, 5e-4);
     let gate = Some(NisGate::chi_square(3, GateConfidence::P999));
     let _ = measure("ekf6 predict+update3 (Joseph, gated)", || {
-        let a = black_box(&mut six)
-            .predict(black_box(&f), black_box(&q))
-            .is_ok();
+        let a = black_box(&mut six).predict(black_box(&f), black_box(&q)).is_ok();
         a && six.update(black_box(&y), &h, &r, gate).is_ok()
     });
     let r_diag = r.diagonal();
     let _ = measure("ekf6 predict+sequential3 (scalar Joseph)", || {
-        let a = black_box(&mut six)
-            .predict(black_box(&f), black_box(&q))
-            .is_ok();
-        a && six
-            .update_sequential(black_box(&y), &h, &r_diag, None)
-            .is_ok()
+        let a = black_box(&mut six).predict(black_box(&f), black_box(&q)).is_ok();
+        a && six.update_sequential(black_box(&y), &h, &r_diag, None).is_ok()
     });
 }
 

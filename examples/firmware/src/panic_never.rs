@@ -13,12 +13,12 @@ use core::hint::black_box;
 use cortex_m_rt::entry;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
+use gnss_attitude::selftest::run_ekf_self_test;
 use gnss_attitude::gyro::{
     lsq::singular_values, AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
     GyroCalibrator, LeastSquaresAccumulator, NormalEquations, PaperCalibrator, PulseDecoder,
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
 };
-use gnss_attitude::selftest::run_ekf_self_test;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 extern "C" {
@@ -30,35 +30,13 @@ fn main() -> ! {
     let p0: SMatrix<f32, 6, 6> = black_box(SMatrix::identity());
     if let Ok(mut ekf) = Ekf::<6>::new(black_box(SVector::zeros()), p0) {
         ekf = ekf.with_variance_floor(black_box(1e-9));
-        let _ = ekf.predict(
-            &black_box(SMatrix::identity()),
-            &black_box(SMatrix::identity()),
-        );
-        let _ = ekf.predict_to(
-            &black_box(SVector::zeros()),
-            &black_box(SMatrix::identity()),
-            &black_box(SMatrix::identity()),
-        );
+        let _ = ekf.predict(&black_box(SMatrix::identity()), &black_box(SMatrix::identity()));
+        let _ = ekf.predict_to(&black_box(SVector::zeros()), &black_box(SMatrix::identity()), &black_box(SMatrix::identity()));
         let h: SMatrix<f32, 3, 6> = black_box(SMatrix::zeros());
         let gate = Some(NisGate::chi_square(black_box(3), GateConfidence::P999));
-        let _ = ekf.update(
-            &black_box(SVector::<f32, 3>::zeros()),
-            &h,
-            &black_box(SMatrix::identity()),
-            gate,
-        );
-        let _ = ekf.update_scalar(
-            black_box(0.1),
-            &black_box(SMatrix::<f32, 1, 6>::zeros()),
-            black_box(1.0),
-            gate,
-        );
-        let _ = ekf.update_sequential(
-            &black_box(SVector::<f32, 3>::zeros()),
-            &h,
-            &black_box(SVector::<f32, 3>::zeros()),
-            gate,
-        );
+        let _ = ekf.update(&black_box(SVector::<f32, 3>::zeros()), &h, &black_box(SMatrix::identity()), gate);
+        let _ = ekf.update_scalar(black_box(0.1), &black_box(SMatrix::<f32, 1, 6>::zeros()), black_box(1.0), gate);
+        let _ = ekf.update_sequential(&black_box(SVector::<f32, 3>::zeros()), &h, &black_box(SVector::<f32, 3>::zeros()), gate);
         let _ = ekf.set_covariance(black_box(SMatrix::identity()));
         let _ = ekf.set_state(black_box(SVector::zeros()));
         let _ = black_box(ekf.nees(&black_box(SVector::zeros())));
