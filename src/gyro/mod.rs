@@ -66,13 +66,14 @@
 //! ```
 
 mod calibration;
+mod calibration_types;
 mod error_model;
 pub mod lsq;
 mod propagation;
 
-pub use calibration::{
-    CalibrationEstimate, CalibratorConfig, EpochCounters, EpochEquations, EpochOutcome,
-    GyroCalibrator, SkipReason,
+pub use calibration::GyroCalibrator;
+pub use calibration_types::{
+    CalibrationEstimate, CalibratorConfig, EpochCounters, EpochEquations, EpochOutcome, SkipReason,
 };
 pub use error_model::{
     AnchorErrorAndDrift, BiasOnly, ConstantDrift, ErrorQuadratures, GyroErrorModel,

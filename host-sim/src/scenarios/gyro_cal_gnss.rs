@@ -21,16 +21,13 @@
 //! least squares are optimistic). The figure that matters for dead reckoning, the rate error
 //! `D(ω) (ĉ − c)` along the actual motion, is reported next to the parameter errors.
 
-use gnss_attitude::geometry::{Euler321, Quaternion};
+use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::gyro::{
     AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig, GyroCalibrator,
     LeastSquaresAccumulator, ScaleMisalignmentBias, SqrtInformation,
 };
 use gnss_attitude::Real;
 use nalgebra::{SVector, Vector3};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde_json::Value;
 
@@ -39,7 +36,7 @@ use super::{Outcome, RunContext};
 use crate::report::{plot_panels, progress, write_csv, Panel, Series};
 use crate::stats;
 use crate::truth::gyro::paper_d;
-use crate::truth::tumble::TumblingBody;
+use crate::truth::tumble::{generate_tumble_run, MemsGyro, TumbleRun as Truth, TumbleSetup};
 
 /// Gyro sample interval (s): 100 Hz.
 const H: f64 = 0.01;
@@ -76,83 +73,6 @@ fn prior_sigma() -> SVector<f64, 12> {
 
 type GnssCal<T> =
     GyroCalibrator<ScaleMisalignmentBias, AnchorErrorAndDrift, SqrtInformation<18, T>, 9, 6, 18, T>;
-
-struct Truth {
-    lambda: Vec<Quaternion<f64>>,
-    /// Gyro output increments (rad), index k = sample k (index 0 unused).
-    gyro: Vec<Vector3<f64>>,
-    /// Reference samples N(t) (antenna frame to inertial), index k (every sample, used at 10 Hz).
-    reference: Vec<Quaternion<f64>>,
-    m0: Quaternion<f64>,
-    /// Mean of the true `c` over the calibration span (the bias wanders).
-    c_mean: SVector<f64, 9>,
-}
-
-fn gauss(rng: &mut ChaCha8Rng) -> f64 {
-    <StandardNormal as Distribution<f64>>::sample(&StandardNormal, rng)
-}
-
-fn gauss3(rng: &mut ChaCha8Rng, s: f64) -> Vector3<f64> {
-    Vector3::new(gauss(rng), gauss(rng), gauss(rng)) * s
-}
-
-/// `random_walks = false` switches the angle and bias random walks off (the white reference
-/// noise stays), to show what limits the calibration.
-fn generate(seed: u64, run: usize, random_walks: bool) -> Truth {
-    let rw = if random_walks { 1.0 } else { 0.0 };
-    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(7_919).wrapping_add(run as u64));
-    let mut body = TumblingBody {
-        inertia: Vector3::new(1.2, 1.6, 2.0),
-        q: Quaternion::from_rotation_vector(&gauss3(&mut rng, 2.0)),
-        omega: Vector3::new(3.0, -4.0, 5.0).map(f64::to_radians) + gauss3(&mut rng, 0.01),
-    };
-    let mount = Euler321::new(0.5, -0.2, 0.3).to_quaternion(); // q_EJ, unknown to the calibrator
-    let mount_nominal =
-        mount * Quaternion::from_rotation_vector(&Vector3::new(3.5e-3, -1.7e-3, 2.6e-3));
-    let n = ((DURATION_S + COAST_S) / H).round() as usize;
-    let n_cal = (DURATION_S / H).round() as usize;
-    let mut c = c_true();
-    let mut c_sum = SVector::<f64, 9>::zeros();
-    let (mut lambda, mut gyro, mut reference) = (
-        Vec::with_capacity(n + 1),
-        Vec::with_capacity(n + 1),
-        Vec::with_capacity(n + 1),
-    );
-    let noisy_ref = |q: &Quaternion<f64>, rng: &mut ChaCha8Rng| {
-        *q * mount * Quaternion::from_rotation_vector(&(gauss3(rng, SIGMA_REF)))
-    };
-    lambda.push(body.q);
-    gyro.push(Vector3::zeros());
-    reference.push(noisy_ref(&body.q, &mut rng));
-    for k in 1..=n {
-        let mut theta = Vector3::zeros();
-        for _ in 0..SUBSTEPS {
-            theta += body.step(H / SUBSTEPS as f64);
-        }
-        // θ* = θ + [D_I D_II](θ) c₁…₆ + h c₇…₉ + ARW noise (the bias wanders)
-        let mut d = paper_d(&theta);
-        for i in 0..3 {
-            d[(i, 6 + i)] = H;
-        }
-        gyro.push(theta + d * c + gauss3(&mut rng, rw * ARW * H.sqrt()));
-        for i in 6..9 {
-            c[i] += rw * BIAS_RW * H.sqrt() * gauss(&mut rng);
-        }
-        if k <= n_cal {
-            c_sum += c;
-        }
-        lambda.push(body.q);
-        reference.push(noisy_ref(&body.q, &mut rng));
-    }
-    let m0 = reference[0] * mount_nominal.conjugate();
-    Truth {
-        lambda,
-        gyro,
-        reference,
-        m0,
-        c_mean: c_sum / n_cal as f64,
-    }
-}
 
 /// The estimate at one re-linearization, for the convergence plot.
 #[derive(Clone, Copy)]
@@ -279,8 +199,26 @@ fn rate_error_rms(truth: &Truth, e: &SVector<f64, 9>) -> f64 {
     stats::rms(&v)
 }
 
+/// The set-up of one run; `random_walks = false` switches the angle and bias random walks off
+/// (the white reference noise stays), to show what limits the calibration.
+fn setup(random_walks: bool) -> TumbleSetup {
+    let rw = if random_walks { 1.0 } else { 0.0 };
+    TumbleSetup {
+        sample_interval: H,
+        substeps: SUBSTEPS,
+        samples: ((DURATION_S + COAST_S) / H).round() as usize,
+        mean_over: (DURATION_S / H).round() as usize,
+        reference_noise: SIGMA_REF,
+        gyro: MemsGyro {
+            c: c_true(),
+            arw: rw * ARW,
+            bias_rw: rw * BIAS_RW,
+        },
+    }
+}
+
 fn one_run(seed: u64, run: usize, random_walks: bool) -> anyhow::Result<RunOutput> {
-    let truth = generate(seed, run, random_walks);
+    let truth = generate_tumble_run(seed, run, &setup(random_walks));
     let r32 = calibrate::<f32>(&truth)?;
     let r64 = calibrate::<f64>(&truth)?;
     Ok(RunOutput {
