@@ -370,3 +370,78 @@ impl From<GeometryError> for DcmError {
         }
     }
 }
+/// Errors of the gyro propagation and calibration ([`crate::gyro`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum CalibrationError {
+    /// A gyro increment, pulse weight, reference attitude, measurement row or right-hand side
+    /// was NaN or infinite.
+    NonFiniteInput,
+    /// A finite input is outside the accepted range: a measurement row or right-hand side
+    /// element larger than [`crate::gyro::MAX_ROW_ENTRY`] in magnitude (so that the accumulators
+    /// can never overflow), a pulse count whose angle exceeds one radian per sample, or a
+    /// reference quaternion far from unit norm.
+    InputOutOfRange,
+    /// A configuration value is invalid: a non-positive sample interval or pulse weight, a
+    /// negative threshold, or a rank tolerance outside `(0, 1)`.
+    InvalidConfig,
+    /// A reference attitude arrived between the two samples of a propagation step `H = 2h`: the
+    /// computed attitude exists only at step boundaries. Deliver references at even sample
+    /// counts.
+    MidStep,
+    /// Fewer rows were accumulated than there are unknowns (`rows`): no estimate and no
+    /// formal standard deviation can be formed.
+    TooFewRows {
+        /// Rows accumulated so far.
+        rows: u32,
+    },
+    /// The accumulated system is rank deficient: the window does not determine every unknown
+    /// (for example a constant angular rate, which cannot separate scale factors,
+    /// misalignments and biases). `rank` is the numerical rank found; retry with a window of
+    /// richer motion.
+    Unobservable {
+        /// Numerical rank of the accumulated system (less than the number of unknowns).
+        rank: u16,
+    },
+    /// The one-sided Jacobi singular-value iteration did not converge within
+    /// [`crate::gyro::JACOBI_MAX_SWEEPS`] sweeps.
+    NotConverged,
+    /// The normal matrix passed the rank test but has no Cholesky factor: rounding destroyed
+    /// its definiteness (normal equations square the condition number).
+    NotPositiveDefinite,
+}
+
+impl Error for CalibrationError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFiniteInput => ErrorKind::NonFinite,
+            Self::InputOutOfRange | Self::InvalidConfig | Self::MidStep => ErrorKind::InvalidInput,
+            Self::TooFewRows { .. } | Self::Unobservable { .. } => ErrorKind::Unobservable,
+            Self::NotConverged => ErrorKind::NotConverged,
+            Self::NotPositiveDefinite => ErrorKind::NotPositiveDefinite,
+        }
+    }
+}
+
+impl fmt::Display for CalibrationError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NonFiniteInput => f.write_str("non-finite calibration input"),
+            Self::InputOutOfRange => f.write_str("calibration input out of range"),
+            Self::InvalidConfig => f.write_str("invalid calibration configuration"),
+            Self::MidStep => f.write_str("reference epoch between the two samples of a step"),
+            Self::TooFewRows { rows } => write!(f, "only {rows} rows accumulated"),
+            Self::Unobservable { rank } => {
+                write!(
+                    f,
+                    "calibration window not observable (numerical rank {rank})"
+                )
+            }
+            Self::NotConverged => f.write_str("Jacobi singular values did not converge"),
+            Self::NotPositiveDefinite => f.write_str("normal matrix lost positive definiteness"),
+        }
+    }
+}
+
+impl core::error::Error for CalibrationError {}

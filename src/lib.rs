@@ -36,6 +36,7 @@
 //! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
 //! | [`attitude`] | Attitude estimators: snapshot from carrier phase with ambiguity resolution (paper 002); direction-cosine, multi-structure and rigid-body filters (paper 000) |
+//! | [`gyro`] | Gyro propagation and in-flight calibration against a reference attitude (paper 001) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
@@ -73,13 +74,17 @@ pub mod attitude;
 pub mod ekf;
 pub mod error;
 pub mod geometry;
+pub mod gyro;
 pub mod noise;
 pub mod selftest;
 
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{AmbiguityError, DcmError, ErrorKind, FilterError, GeometryError, SnapshotError};
+pub use error::{
+    AmbiguityError, CalibrationError, DcmError, ErrorKind, FilterError, GeometryError,
+    SnapshotError,
+};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

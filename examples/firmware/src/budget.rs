@@ -17,6 +17,12 @@ use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{rot_x, rot_y, rot_z, Quaternion};
 use gnss_attitude::selftest::ConstantVelocityModel;
 use nalgebra::{Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
+use gnss_attitude::geometry::Quaternion;
+use gnss_attitude::gyro::{
+    default_rank_tolerance, CalibratorConfig, EpochOutcome, LeastSquaresAccumulator,
+    NormalEquations, PaperCalibrator, SqrtInformation,
+};
+use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -74,6 +80,7 @@ pub fn run_all() {
     ekf_budgets();
     snapshot_budgets();
     dcm_budgets();
+    gyro_budgets();
 }
 
 fn ekf_budgets() {
@@ -199,4 +206,104 @@ fn dcm_budgets() {
             black_box(&mut rigid).step(black_box(&epoch)).is_ok()
         });
     }
+/// Paper 001 §6 on the target: 30 s of the paper's rates with its gyro errors against a perfect
+/// reference (131 epochs, 393 rows), then one of each step on the filled accumulators.
+fn gyro_budgets() {
+    const RATES: [[f32; 3]; 6] = [
+        [0.01, 0.02, -0.01],
+        [0.02, 0.32, -0.015],
+        [0.01, 0.01, -0.02],
+        [0.16, 0.015, -0.03],
+        [0.03, 0.017, -0.16],
+        [0.02, 0.02, -0.02],
+    ];
+    let h = 0.02f32;
+    let bias = Vector3::new(1e-5f32, -1e-5, -1e-5);
+    let scale = 3e-4f32;
+    let w0 = Quaternion::from_rotation_vector(&Vector3::new(2e-3f32, 2e-3, 2e-3));
+    let lambda0 = Quaternion::new(0.64f32, 0.48, 0.36, -0.48);
+    let mut cal = match PaperCalibrator::<SqrtInformation<15>>::paper(
+        CalibratorConfig::new(h),
+        SqrtInformation::new(),
+        w0.conjugate() * lambda0,
+        lambda0,
+    ) {
+        Ok(c) => c,
+        Err(_) => return,
+    };
+    let mut normal = NormalEquations::<15>::new();
+    let mut truth = lambda0;
+    let mut row = (SVector::<f32, 15>::zeros(), 0.0f32);
+    for k in 1..=1500usize {
+        let w = Vector3::from(RATES[((k - 1) / 250).min(5)]);
+        truth = truth * Quaternion::from_rotation_vector(&(w * h));
+        if cal
+            .push_increment(&((w * (1.0 + scale) + bias) * h))
+            .is_err()
+        {
+            return;
+        }
+        if k >= 200 && k % 10 == 0 {
+            if let Ok(EpochOutcome::Used(eq)) = cal.add_reference(&truth) {
+                for r in 0..3 {
+                    row = (eq.rows.row(r).transpose(), eq.rhs[r]);
+                    let _ = normal.add_row(&row.0, row.1);
+                }
+            }
+        }
+    }
+    let tol = default_rank_tolerance::<f32>();
+    let theta = Vector3::new(4e-4f32, 6.4e-3, -3e-4);
+    let mut prop = cal.clone();
+    let _ = measure(
+        "gyro propagation step H (two increments, coning, quadratures)",
+        || {
+            let a = black_box(&mut prop)
+                .push_increment(black_box(&theta))
+                .is_ok();
+            a && prop.push_increment(black_box(&theta)).is_ok()
+        },
+    );
+    let mut epoch = cal.clone();
+    let _ = measure(
+        "gyro calibrator epoch (eq. 2.7 rows + 3 Givens rows, 15 unknowns)",
+        || {
+            black_box(&mut epoch)
+                .add_reference(black_box(&truth))
+                .is_ok()
+        },
+    );
+    let mut givens = *cal.accumulator();
+    let _ = measure("gyro Givens accumulation of one row (15 unknowns)", || {
+        black_box(&mut givens)
+            .add_row(black_box(&row.0), black_box(row.1))
+            .is_ok()
+    });
+    let mut ne = normal;
+    let _ = measure(
+        "gyro normal-equation accumulation of one row, eq. (5.8)",
+        || {
+            black_box(&mut ne)
+                .add_row(black_box(&row.0), black_box(row.1))
+                .is_ok()
+        },
+    );
+    let givens = *cal.accumulator();
+    let solved = measure(
+        "gyro Givens solve + observability (2 Jacobi SVDs, 15 unknowns)",
+        || {
+            black_box(&givens)
+                .solve(black_box(tol))
+                .map(|s| s.observability.rank)
+        },
+    );
+    let _ = measure(
+        "gyro normal-equation solve + observability (Cholesky)",
+        || {
+            black_box(&normal)
+                .solve(black_box(tol))
+                .map(|s| s.observability.rank)
+        },
+    );
+    hprintln!("gyro budgets: Givens solve rank {:?}", solved);
 }

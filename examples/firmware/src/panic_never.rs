@@ -19,7 +19,12 @@ use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
 use gnss_attitude::selftest::run_ekf_self_test;
-use nalgebra::{Matrix3, SMatrix, SVector};
+use gnss_attitude::gyro::{
+    lsq::singular_values, AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
+    GyroCalibrator, LeastSquaresAccumulator, NormalEquations, PaperCalibrator, PulseDecoder,
+    ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
+};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 extern "C" {
     fn gnss_attitude_core_can_panic() -> !;
@@ -53,6 +58,7 @@ fn main() -> ! {
     let _ = black_box(run_ekf_self_test());
     snapshot_entry_points();
     dcm_entry_points();
+    gyro();
     loop {
         cortex_m::asm::nop();
     }
@@ -133,6 +139,67 @@ fn dcm_entry_points() {
     }
     let antennas: [Option<nalgebra::Vector3<f32>>; 3] = black_box([None; 3]);
     let _ = black_box(BaselineEpoch::from_antennas(&antennas, &antennas));
+#[inline(never)]
+fn gyro() {
+    let config = CalibratorConfig::new(black_box(0.02f32)).with_pulses(
+        black_box(2e-5),
+        black_box(ResidualCentering::IncrementCorrection),
+    );
+    let q = Quaternion::new(
+        black_box(0.64f32),
+        black_box(0.48),
+        black_box(0.36),
+        black_box(-0.48),
+    );
+    let theta: Vector3<f32> = black_box(Vector3::new(1e-3, 2e-3, -1e-3));
+    if let Ok(mut cal) =
+        PaperCalibrator::<SqrtInformation<15>>::paper(config, SqrtInformation::new(), q, q)
+    {
+        let _ = cal.push_increment(&theta);
+        let _ = cal.push_pulses(black_box([3, -7, 100]));
+        let _ = cal.set_gyro_correction(black_box(SVector::zeros()));
+        let _ = black_box(cal.equations(&q));
+        let _ = black_box(cal.add_reference(&q));
+        let _ = black_box(cal.add_reference_euler(&Euler321::new(
+            black_box(0.1),
+            black_box(1.5),
+            black_box(-0.2),
+        )));
+        if let Ok(est) = cal.solve() {
+            let _ = black_box(cal.corrected_attitude(&est));
+        }
+        let _ = black_box(cal.accumulator().marginalize(&black_box([true; 15])));
+    }
+    type Gnss =
+        GyroCalibrator<ScaleMisalignmentBias, AnchorErrorAndDrift, NormalEquations<18>, 9, 6, 18>;
+    if let Ok(mut cal) = Gnss::new(
+        config,
+        ScaleMisalignmentBias,
+        AnchorErrorAndDrift,
+        NormalEquations::new(),
+        q,
+        q,
+    ) {
+        let _ = cal.push_increment(&theta);
+        let _ = cal.push_increment(&theta);
+        let _ = black_box(cal.add_reference(&q));
+        if let Ok(est) = cal.solve() {
+            let _ = black_box(cal.corrected_attitude(&est));
+        }
+    }
+    let mut acc = SqrtInformation::<15>::new();
+    let _ = acc.add_row(&black_box(SVector::repeat(0.5)), black_box(1.0));
+    let _ = black_box(acc.observability(black_box(1e-4)));
+    let mut prop = AttitudePropagator::<f32>::new(q);
+    if let Ok(p) = prop.as_mut() {
+        let _ = black_box(p.push(&theta));
+    }
+    if let Ok(mut d) = PulseDecoder::new(black_box(1e-5f32), ResidualCentering::MeanResidual) {
+        let _ = black_box(d.decode(black_box([1, 2, 3])));
+    }
+    let _ = black_box(singular_values(
+        &black_box(SMatrix::<f32, 6, 6>::identity()),
+    ));
 }
 
 #[panic_handler]

@@ -13,11 +13,18 @@ use anyhow::{anyhow, bail};
 use serde_json::{json, Map, Value};
 
 pub mod dcm;
+pub mod gyro_cal;
+pub mod gyro_cal_gnss;
 pub mod snapshot;
 pub mod vector_ekf;
 
 /// Every scenario host-sim can run, in the order `host-sim list` shows them.
-pub const SCENARIOS: &[Scenario] = &[vector_ekf::SCENARIO, snapshot::SCENARIO, dcm::SCENARIO];
+pub const SCENARIOS: &[Scenario] = &[
+    vector_ekf::SCENARIO,
+    snapshot::SCENARIO,
+    dcm::SCENARIO,
+    gyro_cal::SCENARIO,
+];
 
 /// What `host-sim` runs when called without arguments.
 pub const DEFAULT_SCENARIO: &str = "vector-ekf";

@@ -7,7 +7,10 @@
 //! * [`kinematics`]: attitude kinematics of a rigid body.
 //! * [`orbit`]: LEO orbit (Kepler + secular J2), ECI/ECEF, the local orbital frame.
 //! * [`attitude`]: attitude histories (nadir pointing with tumble, detumbling body).
-//! * [`gyro`]: a MEMS gyro triad with paper 001's error model and quantized output.
+//! * [`gyro`]: paper 001's gyro error model and §6 experiment; a MEMS gyro triad with
+//!   quantized output on any attitude history.
+//! * [`tumble`]: a torque-free tumbling body with a MEMS gyro and a noisy attitude reference
+//!   (paper 001's `gnss-ref` variant).
 //! * [`gps`]: the GPS constellation from a YUMA almanac; elevation, azimuth, line of sight.
 
 pub mod attitude;
@@ -15,3 +18,4 @@ pub mod gps;
 pub mod gyro;
 pub mod kinematics;
 pub mod orbit;
+pub mod tumble;
