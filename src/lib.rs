@@ -35,6 +35,7 @@
 //! |---|---|
 //! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
+//! | [`attitude`] | The attitude estimators (paper 003's one-stage filter, ...) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
@@ -68,6 +69,7 @@
 #[macro_use]
 mod log;
 
+pub mod attitude;
 pub mod ekf;
 pub mod error;
 pub mod geometry;
@@ -77,7 +79,7 @@ pub mod selftest;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{ErrorKind, FilterError, GeometryError};
+pub use error::{ErrorKind, FilterError, GeometryError, OneStageError};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

@@ -1,0 +1,197 @@
+//! Pull-in and false-lock detection from the normalized coherent power.
+//!
+//! The likelihood of eq. (15) has, besides its peak at the true attitude, secondary peaks
+//! where the phase differences of some satellites wrap by whole cycles. A loop that starts too
+//! far away can settle on one and would then report a confident, wrong attitude. At a wrong
+//! peak the antennas of at least some satellites are not phase-aligned after derotation by the
+//! estimated phases, which the **alignment**
+//!
+//! ```text
+//!        Σ_i (X_i² − 6)
+//! η = ─────────────────────────   (noise units, σ = 1 per component)
+//!      Σ_i 3 (Σ_P |z_P,i|² − 6)
+//! ```
+//!
+//! measures: numerator and denominator are unbiased estimates of `Σ_i A_i² |Σ_P e^{jδ_{P,i}}|²`
+//! and `9 Σ_i A_i²` (`δ` the phase errors), so `η = 1` at the true attitude whatever the C/N0,
+//! and `η < 1` elsewhere. For the paper's geometry G1 with eight satellites the secondary peaks
+//! of β have `η ≤ 0.72`, with the first two satellites only `η ≤ 0.84` (besides two peaks at
+//! ±52° with `η = 0.99`, which no statistic of two satellites can tell from the truth).
+//!
+//! The numerator and denominator are low-passed separately (time constant `τ`) and the ratio is
+//! compared with two thresholds:
+//!
+//! * [`LockStatus::PullIn`] after (re)initialization, until `η̄ ≥ lock_threshold` has held for
+//!   `hold_s`; then [`LockStatus::Locked`].
+//! * [`LockStatus::FalseLock`] when pull-in has not succeeded within `pull_in_timeout_s`, or
+//!   when a locked filter's `η̄` falls below `unlock_threshold`. A flagged filter returns to
+//!   `Locked` only by passing the lock test again. Flight software should re-initialize it
+//!   (from the snapshot solver) rather than use its attitude.
+
+use crate::{real, Real};
+
+/// The detector's verdict on the current estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LockStatus {
+    /// Pulling in after (re)initialization: not yet shown to be at the true peak.
+    PullIn,
+    /// Phase-aligned on all satellites: the estimate is at the true peak.
+    Locked,
+    /// Not aligned after the pull-in time, or alignment lost: the attitude must not be used.
+    FalseLock,
+}
+
+/// Thresholds and times of the detector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LockConfig<T = f32> {
+    /// Low-pass time constant `τ` of the power sums, s.
+    pub time_constant_s: T,
+    /// `η̄` needed to declare lock, in `(0, 1]`.
+    pub lock_threshold: T,
+    /// `η̄` below which a locked filter is flagged, in `(0, lock_threshold]`.
+    pub unlock_threshold: T,
+    /// How long `η̄ ≥ lock_threshold` must hold before lock is declared, s.
+    pub hold_s: T,
+    /// Pull-in time after which a filter not yet locked is flagged, s.
+    pub pull_in_timeout_s: T,
+}
+
+impl<T: Real> Default for LockConfig<T> {
+    /// `τ` = 50 ms, lock at `η̄ ≥ 0.9` held 100 ms, flag below 0.85 or after 1.5 s of pull-in.
+    fn default() -> Self {
+        Self {
+            time_constant_s: real(0.05),
+            lock_threshold: real(0.9),
+            unlock_threshold: real(0.85),
+            hold_s: real(0.1),
+            pull_in_timeout_s: real(1.5),
+        }
+    }
+}
+
+impl<T: Real> LockConfig<T> {
+    pub(crate) fn is_valid(&self) -> bool {
+        let all_finite = [
+            self.time_constant_s,
+            self.lock_threshold,
+            self.unlock_threshold,
+            self.hold_s,
+            self.pull_in_timeout_s,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        all_finite
+            && self.time_constant_s > T::zero()
+            && self.lock_threshold > T::zero()
+            && self.lock_threshold <= T::one()
+            && self.unlock_threshold > T::zero()
+            && self.unlock_threshold <= self.lock_threshold
+            && self.hold_s >= T::zero()
+            && self.pull_in_timeout_s > T::zero()
+    }
+}
+
+/// The detector's state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LockDetector<T = f32> {
+    coherent: T,
+    aligned: T,
+    primed: bool,
+    status: LockStatus,
+    /// Epochs since (re)initialization (saturating).
+    epochs: u32,
+    /// Consecutive epochs with `η̄ ≥ lock_threshold`.
+    above: u32,
+    gain: T,
+    hold_epochs: u32,
+    timeout_epochs: u32,
+    lock_threshold: T,
+    unlock_threshold: T,
+}
+
+fn epochs_of<T: Real>(seconds: T, epoch_s: T) -> u32 {
+    let n = (seconds / epoch_s).ceil();
+    if n >= real(u32::MAX as f64) {
+        u32::MAX
+    } else if n > T::zero() {
+        // exact: n is an integer below 2³², and f64/f32 convert it to u32 without rounding
+        nalgebra::try_convert::<T, f64>(n).map_or(u32::MAX, |v| v as u32)
+    } else {
+        0
+    }
+}
+
+impl<T: Real> LockDetector<T> {
+    /// A detector in [`LockStatus::PullIn`] for epochs of `epoch_s` seconds (config already
+    /// validated).
+    pub(crate) fn new(config: &LockConfig<T>, epoch_s: T) -> Self {
+        Self {
+            coherent: T::zero(),
+            aligned: T::zero(),
+            primed: false,
+            status: LockStatus::PullIn,
+            epochs: 0,
+            above: 0,
+            gain: (epoch_s / config.time_constant_s).min(T::one()),
+            hold_epochs: epochs_of(config.hold_s, epoch_s),
+            timeout_epochs: epochs_of(config.pull_in_timeout_s, epoch_s),
+            lock_threshold: config.lock_threshold,
+            unlock_threshold: config.unlock_threshold,
+        }
+    }
+
+    /// Back to pull-in (after re-initialization).
+    pub(crate) fn restart(&mut self) {
+        self.primed = false;
+        self.status = LockStatus::PullIn;
+        self.epochs = 0;
+        self.above = 0;
+    }
+
+    /// The current verdict.
+    pub fn status(&self) -> LockStatus {
+        self.status
+    }
+
+    /// The smoothed alignment `η̄` (0 before the first epoch with satellites).
+    pub fn alignment(&self) -> T {
+        if self.aligned > T::zero() {
+            self.coherent / self.aligned
+        } else {
+            T::zero()
+        }
+    }
+
+    /// Feeds one epoch's power sums (see [`super::EpochInformation`]); an epoch without
+    /// satellites (`aligned_power = 0`) only advances the clock.
+    pub(crate) fn update(&mut self, coherent_power: T, aligned_power: T, satellites: u8) {
+        self.epochs = self.epochs.saturating_add(1);
+        if satellites > 0 && coherent_power.is_finite() && aligned_power.is_finite() {
+            if self.primed {
+                self.coherent += (coherent_power - self.coherent) * self.gain;
+                self.aligned += (aligned_power - self.aligned) * self.gain;
+            } else {
+                self.coherent = coherent_power;
+                self.aligned = aligned_power;
+                self.primed = true;
+            }
+        }
+        let eta = self.alignment();
+        self.above = if self.primed && eta >= self.lock_threshold {
+            self.above.saturating_add(1)
+        } else {
+            0
+        };
+        let passed = self.above > self.hold_epochs;
+        self.status = match self.status {
+            LockStatus::PullIn if passed => LockStatus::Locked,
+            LockStatus::PullIn if self.epochs > self.timeout_epochs => LockStatus::FalseLock,
+            LockStatus::Locked if eta < self.unlock_threshold => LockStatus::FalseLock,
+            LockStatus::FalseLock if passed => LockStatus::Locked,
+            s => s,
+        };
+    }
+}
