@@ -62,8 +62,10 @@ impl EstimatedAngles {
 pub enum ProcessNoise<T = f32> {
     /// Scheduled every epoch so that the filter's steady state is the second-order loop of
     /// bandwidth `loop_bandwidth_hz` (angles) and the first-order loop of `bias_bandwidth_hz`
-    /// (biases): `q_j = ω_n⁴ / J_jj` with `ω_n = Δf/0.53` and `J_jj` the expected information
-    /// rate of parameter `j` (1/rad²/s), and `q_b = (4 Δf_b)² / J_bb`. (The steady-state
+    /// (biases): `q_j = ω_n⁴ / J_j` with `ω_n = Δf/0.53` and `J_j = 1/(J⁻¹)_jj` the marginal
+    /// expected information rate of angle `j` among the angles (biases taken as known,
+    /// 1/rad²/s), and `q_b = (4 Δf_b)² / J_b` with `J_b` the marginal information of the bias
+    /// among all parameters — the slopes the constant-gain loop normalizes by. (The steady-state
     /// Kalman filter of a double integrator with white acceleration of density `q` and
     /// measurement information rate `J` has `ω_n = (qJ)^{1/4}` and `ζ = 1/√2`, so
     /// `B_L = 0.53 ω_n = Δf`.) The bandwidth then stays at `Δf` as satellites come and go,

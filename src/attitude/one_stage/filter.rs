@@ -29,6 +29,8 @@ pub struct EpochReport<T = f32> {
     pub status: LockStatus,
     /// Smoothed alignment `η̄` (1 at the true peak, see [`super::lock`]).
     pub alignment: T,
+    /// The lock detector's settle statistic `s` (χ² scale, see [`super::lock`]).
+    pub settle_statistic: T,
     /// The angle discriminator `u_α` of eq. (32) at the predicted state, 1/rad (α, β, γ;
     /// zero for angles not estimated).
     pub angle_discriminator: [T; 3],
@@ -90,7 +92,7 @@ fn wrap<T: Real>(angle: T) -> T {
     }
 }
 
-/// `L̃` with `W = L̃ L̃ᵀ` for a symmetric positive semi-definite `W` (LDLᵀ without pivoting,
+/// `L̃` with `W = L̃ L̃ᵀ` for a symmetric positive semi-definite `W` (`LDLᵀ` without pivoting,
 /// pivots below `1e-6 · max diag` taken as zero, so a singular `W` gives zero columns):
 /// `N` outer steps, bounded.
 fn psd_factor<T: Real, const N: usize>(w: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
@@ -131,6 +133,34 @@ fn regularized_solve<T: Real, const N: usize>(
     let max_diag = j.diagonal().iter().fold(T::zero(), |m, &v| m.max(v));
     let reg = j + SMatrix::<T, N, N>::identity() * (max_diag * real(1e-4) + real(1e-30));
     Cholesky::new(reg).map_or_else(SVector::zeros, |c| c.solve(b))
+}
+
+/// `1/(J⁻¹)_kk` for every parameter with information (`J_kk > 0`), zero for the others (whose
+/// rows and columns are replaced by the identity before the factorization). The same
+/// regularization as [`regularized_solve`].
+fn marginal_information<T: Real, const N: usize>(j: &SMatrix<T, N, N>) -> SVector<T, N> {
+    let max_diag = j.diagonal().iter().fold(T::zero(), |m, &v| m.max(v));
+    let mut m = *j + SMatrix::<T, N, N>::identity() * (max_diag * real(1e-4));
+    let has = j.diagonal().map(|v| v > T::zero());
+    for k in 0..N {
+        if !has.get(k).copied().unwrap_or(false) {
+            m.row_mut(k).fill(T::zero());
+            m.column_mut(k).fill(T::zero());
+            set(&mut m, k, k, T::one());
+        }
+    }
+    let Some(chol) = Cholesky::new(m) else {
+        return SVector::zeros();
+    };
+    let inv = chol.inverse();
+    SVector::from_fn(|k, _| {
+        let d = el(&inv, k, k);
+        if has.get(k).copied().unwrap_or(false) && d > T::zero() {
+            d.recip()
+        } else {
+            T::zero()
+        }
+    })
 }
 
 impl<T: Real> OneStageFilter<T> {
@@ -253,10 +283,15 @@ impl<T: Real> OneStageFilter<T> {
         let active = Self::active(&self.config);
         mask(&mut info, &active);
 
+        // the normalized angle discriminator v = J_αα⁻¹ u_α (conditional on the biases)
+        let j_aa: Matrix3<T> = info.expected.fixed_view::<3, 3>(0, 0).into_owned();
+        let u_a: Vector3<T> = info.gradient.fixed_rows::<3>(0).into_owned();
+        let normalized = regularized_solve(&j_aa, &u_a);
+
         let mut next = self.clone();
         match self.config.mode {
             FilterMode::GaussianApproximation => next.gaussian_update(&f, &x_pred, &info)?,
-            FilterMode::ConstantGain => next.constant_gain_update(&x_pred, &info)?,
+            FilterMode::ConstantGain => next.constant_gain_update(&x_pred, &info, &normalized)?,
         }
         let mut x = *next.ekf.state();
         for i in 0..3 {
@@ -265,8 +300,13 @@ impl<T: Real> OneStageFilter<T> {
         next.ekf
             .set_state(x)
             .map_err(|_| OneStageError::Numerical)?;
-        next.lock
-            .update(info.coherent_power, info.aligned_power, info.satellites);
+        next.lock.update(
+            info.coherent_power,
+            info.aligned_power,
+            info.satellites,
+            &normalized,
+            &j_aa,
+        );
         let step = |i: usize| {
             let d = x[i] - x_pred[i];
             if self
@@ -286,6 +326,7 @@ impl<T: Real> OneStageFilter<T> {
             satellites: info.satellites,
             status: next.lock.status(),
             alignment: next.lock.alignment(),
+            settle_statistic: next.lock.settle_statistic(),
             angle_discriminator: [info.gradient[0], info.gradient[1], info.gradient[2]],
             angle_step: [step(0), step(1), step(2)],
             curvature_floored: info.floored,
@@ -349,9 +390,15 @@ impl<T: Real> OneStageFilter<T> {
             ProcessNoise::Bandwidth => {
                 let wn = self.config.natural_frequency();
                 let wb = self.config.bias_bandwidth_hz * real(4.0);
+                // marginal information of each angle (biases known) and of each bias (all
+                // else unknown), as the constant-gain loop's normalization sees them
+                let j_aa: Matrix3<T> = info.expected.fixed_view::<3, 3>(0, 0).into_owned();
+                let angles = marginal_information(&j_aa);
+                let all = marginal_information(&info.expected);
                 for (k, slot) in self.scheduled_psd.iter_mut().enumerate() {
-                    // information rate J_kk / T, 1/rad²/s
-                    let rate = el(&info.expected, k, k) / t;
+                    let j = if k < 3 { angles.get(k) } else { all.get(k) };
+                    // information rate J / T, 1/rad²/s
+                    let rate = j.copied().unwrap_or_else(T::zero) / t;
                     if rate > T::zero() && rate.is_finite() {
                         *slot = if k < 3 {
                             wn * wn * wn * wn / rate // q = ω_n⁴ / J
@@ -366,9 +413,9 @@ impl<T: Real> OneStageFilter<T> {
         let mut q = SMatrix::<T, STATES, STATES>::zeros();
         for (k, (&on, &qk)) in active.iter().zip(psd.iter()).enumerate() {
             if on {
-                // the rate of angle k (eq. (7): v_k = v_{k−1} + ξ), or the bias itself
-                let idx = if k < 3 { 3 + k } else { k + 3 };
-                set(&mut q, idx, idx, qk * t);
+                // state k + 3: the rate of angle k (eq. (7): v_k = v_{k−1} + ξ) for k < 3, the
+                // bias itself (states 6, 7) for k = 3, 4
+                set(&mut q, k + 3, k + 3, qk * t);
             }
         }
         q
@@ -382,14 +429,12 @@ impl<T: Real> OneStageFilter<T> {
         &mut self,
         x_pred: &SVector<T, STATES>,
         info: &EpochInformation<T>,
+        un_a: &Vector3<T>,
     ) -> Result<(), OneStageError> {
         let mut x = *x_pred;
         if info.satellites > 0 {
             let (k1, k2) = self.config.loop_gains();
             let kb = self.config.bias_gain();
-            let j_aa: Matrix3<T> = info.expected.fixed_view::<3, 3>(0, 0).into_owned();
-            let u_a: Vector3<T> = info.gradient.fixed_rows::<3>(0).into_owned();
-            let un_a = regularized_solve(&j_aa, &u_a);
             for i in 0..3 {
                 x[i] += k1 * un_a[i];
                 x[3 + i] += k2 * un_a[i];

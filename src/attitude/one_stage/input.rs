@@ -65,10 +65,11 @@ impl<T: Real> SatelliteObservation<T> {
         }
         let los = Vector3::from(self.los);
         let n = los.norm();
-        if !((n - T::one()).abs() <= real(1e-3))
-            || !(self.noise_var > T::zero())
-            || !(self.cn0_dbhz >= T::zero() && self.cn0_dbhz <= real(90.0))
-        {
+        let usable = (n - T::one()).abs() <= real(1e-3)
+            && self.noise_var > T::zero()
+            && self.cn0_dbhz >= T::zero()
+            && self.cn0_dbhz <= real(90.0);
+        if !usable {
             return Err(OneStageError::InvalidObservation);
         }
         let sigma = self.noise_var.sqrt();

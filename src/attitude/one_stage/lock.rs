@@ -19,14 +19,22 @@
 //! ±52° with `η = 0.99`, which no statistic of two satellites can tell from the truth).
 //!
 //! The numerator and denominator are low-passed separately (time constant `τ`) and the ratio is
-//! compared with two thresholds:
+//! compared with two thresholds. Alignment alone would declare lock while a loop is still
+//! sliding down the main peak (`η ≥ 0.9` holds within about ±1.3° of the truth for G1), so
+//! lock also requires the loop to have **settled**: the normalized discriminator
+//! `v = J_αα⁻¹ u_α` (the per-epoch estimate of the remaining angle error), low-passed with the
+//! same `τ` to `v̄`, must be consistent with zero, `s = v̄ᵀ J_αα v̄ · 2τ/T ≤ settle_threshold`
+//! (`s` is at most χ² with as many degrees of freedom as estimated angles; the loop's own
+//! high-pass response makes it smaller).
 //!
-//! * [`LockStatus::PullIn`] after (re)initialization, until `η̄ ≥ lock_threshold` has held for
-//!   `hold_s`; then [`LockStatus::Locked`].
+//! * [`LockStatus::PullIn`] after (re)initialization, until `η̄ ≥ lock_threshold` and
+//!   `s ≤ settle_threshold` have held together for `hold_s`; then [`LockStatus::Locked`].
 //! * [`LockStatus::FalseLock`] when pull-in has not succeeded within `pull_in_timeout_s`, or
 //!   when a locked filter's `η̄` falls below `unlock_threshold`. A flagged filter returns to
 //!   `Locked` only by passing the lock test again. Flight software should re-initialize it
 //!   (from the snapshot solver) rather than use its attitude.
+
+use nalgebra::{Matrix3, Vector3};
 
 use crate::{real, Real};
 
@@ -38,7 +46,9 @@ pub enum LockStatus {
     PullIn,
     /// Phase-aligned on all satellites: the estimate is at the true peak.
     Locked,
-    /// Not aligned after the pull-in time, or alignment lost: the attitude must not be used.
+    /// Not shown to be at the true peak within the pull-in time (a false lock on a secondary
+    /// peak, or a pull-in too slow to trust), or alignment lost after lock: the attitude must
+    /// not be used. Leaves this state only by passing the lock test again.
     FalseLock,
 }
 
@@ -56,10 +66,13 @@ pub struct LockConfig<T = f32> {
     pub hold_s: T,
     /// Pull-in time after which a filter not yet locked is flagged, s.
     pub pull_in_timeout_s: T,
+    /// Largest settle statistic `s` at which lock may be declared (χ² scale).
+    pub settle_threshold: T,
 }
 
 impl<T: Real> Default for LockConfig<T> {
-    /// `τ` = 50 ms, lock at `η̄ ≥ 0.9` held 100 ms, flag below 0.85 or after 1.5 s of pull-in.
+    /// `τ` = 50 ms, lock at `η̄ ≥ 0.9` and `s ≤ 16.27` (χ²₃ at 99.9 %) held 100 ms, flag
+    /// below 0.85 or after 1.5 s of pull-in.
     fn default() -> Self {
         Self {
             time_constant_s: real(0.05),
@@ -67,6 +80,7 @@ impl<T: Real> Default for LockConfig<T> {
             unlock_threshold: real(0.85),
             hold_s: real(0.1),
             pull_in_timeout_s: real(1.5),
+            settle_threshold: real(16.27),
         }
     }
 }
@@ -79,6 +93,7 @@ impl<T: Real> LockConfig<T> {
             self.unlock_threshold,
             self.hold_s,
             self.pull_in_timeout_s,
+            self.settle_threshold,
         ]
         .iter()
         .all(|v| v.is_finite());
@@ -90,6 +105,7 @@ impl<T: Real> LockConfig<T> {
             && self.unlock_threshold <= self.lock_threshold
             && self.hold_s >= T::zero()
             && self.pull_in_timeout_s > T::zero()
+            && self.settle_threshold > T::zero()
     }
 }
 
@@ -99,6 +115,10 @@ impl<T: Real> LockConfig<T> {
 pub struct LockDetector<T = f32> {
     coherent: T,
     aligned: T,
+    /// Low-passed normalized angle discriminator `v̄`, rad.
+    settle: [T; 3],
+    /// `s = v̄ᵀ J_αα v̄ · 2τ/T` of the last epoch.
+    settle_statistic: T,
     primed: bool,
     status: LockStatus,
     /// Epochs since (re)initialization (saturating).
@@ -110,11 +130,12 @@ pub struct LockDetector<T = f32> {
     timeout_epochs: u32,
     lock_threshold: T,
     unlock_threshold: T,
+    settle_threshold: T,
 }
 
 fn epochs_of<T: Real>(seconds: T, epoch_s: T) -> u32 {
     let n = (seconds / epoch_s).ceil();
-    if n >= real(u32::MAX as f64) {
+    if n >= real(f64::from(u32::MAX)) {
         u32::MAX
     } else if n > T::zero() {
         // exact: n is an integer below 2³², and f64/f32 convert it to u32 without rounding
@@ -131,6 +152,8 @@ impl<T: Real> LockDetector<T> {
         Self {
             coherent: T::zero(),
             aligned: T::zero(),
+            settle: [T::zero(); 3],
+            settle_statistic: T::zero(),
             primed: false,
             status: LockStatus::PullIn,
             epochs: 0,
@@ -140,6 +163,7 @@ impl<T: Real> LockDetector<T> {
             timeout_epochs: epochs_of(config.pull_in_timeout_s, epoch_s),
             lock_threshold: config.lock_threshold,
             unlock_threshold: config.unlock_threshold,
+            settle_threshold: config.settle_threshold,
         }
     }
 
@@ -165,22 +189,55 @@ impl<T: Real> LockDetector<T> {
         }
     }
 
-    /// Feeds one epoch's power sums (see [`super::EpochInformation`]); an epoch without
-    /// satellites (`aligned_power = 0`) only advances the clock.
-    pub(crate) fn update(&mut self, coherent_power: T, aligned_power: T, satellites: u8) {
+    /// The settle statistic `s` of the last epoch (χ² scale; see the module documentation).
+    pub fn settle_statistic(&self) -> T {
+        self.settle_statistic
+    }
+
+    /// Feeds one epoch: the power sums (see [`super::EpochInformation`]), the normalized
+    /// angle discriminator `v = J_αα⁻¹ u_α` (rad; zero for held angles) and `J_αα` (1/rad²).
+    /// An epoch without satellites only advances the clock.
+    pub(crate) fn update(
+        &mut self,
+        coherent_power: T,
+        aligned_power: T,
+        satellites: u8,
+        normalized: &Vector3<T>,
+        information: &Matrix3<T>,
+    ) {
         self.epochs = self.epochs.saturating_add(1);
-        if satellites > 0 && coherent_power.is_finite() && aligned_power.is_finite() {
+        let usable = satellites > 0
+            && coherent_power.is_finite()
+            && aligned_power.is_finite()
+            && normalized.iter().all(|v| v.is_finite());
+        if usable {
+            let v = [normalized.x, normalized.y, normalized.z];
             if self.primed {
                 self.coherent += (coherent_power - self.coherent) * self.gain;
                 self.aligned += (aligned_power - self.aligned) * self.gain;
+                for (s, &vi) in self.settle.iter_mut().zip(v.iter()) {
+                    *s += (vi - *s) * self.gain;
+                }
             } else {
                 self.coherent = coherent_power;
                 self.aligned = aligned_power;
+                self.settle = v;
                 self.primed = true;
             }
+            // s = v̄ᵀ J v̄ · 2τ/T: the low-pass of gain g = T/τ leaves g/(2 − g) of the variance
+            let vbar = Vector3::from(self.settle);
+            let two = T::one() + T::one();
+            let scale = (two - self.gain) / self.gain;
+            let s = vbar.dot(&(information * vbar)) * scale;
+            self.settle_statistic = if s.is_finite() {
+                s
+            } else {
+                T::max_value().unwrap_or_else(T::one)
+            };
         }
         let eta = self.alignment();
-        self.above = if self.primed && eta >= self.lock_threshold {
+        let settled = self.settle_statistic <= self.settle_threshold;
+        self.above = if self.primed && eta >= self.lock_threshold && settled {
             self.above.saturating_add(1)
         } else {
             0
