@@ -205,7 +205,7 @@ mod tests {
         let mut term = 1.0;
         let mut sum = 1.0;
         for k in 1..200 {
-            term *= (x / 2.0) * (x / 2.0) / (k as f64 * k as f64);
+            term *= (x / 2.0) * (x / 2.0) / (f64::from(k) * f64::from(k));
             sum += term;
         }
         sum.ln()
