@@ -252,3 +252,62 @@ impl<T: Real> LockDetector<T> {
         };
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn detector() -> LockDetector<f64> {
+        LockDetector::new(&LockConfig::default(), 1e-3)
+    }
+
+    fn feed(d: &mut LockDetector<f64>, eta: f64, v: f64, epochs: usize) {
+        let j = Matrix3::identity() * 1e5;
+        for _ in 0..epochs {
+            d.update(eta * 180.0, 180.0, 8, &Vector3::new(0.0, v, 0.0), &j);
+        }
+    }
+
+    #[test]
+    fn aligned_and_settled_locks_after_the_hold_time() {
+        let mut d = detector();
+        feed(&mut d, 1.0, 0.0, 100);
+        assert_eq!(d.status(), LockStatus::PullIn);
+        feed(&mut d, 1.0, 0.0, 2);
+        assert_eq!(d.status(), LockStatus::Locked);
+        // losing alignment flags it
+        feed(&mut d, 0.7, 0.0, 100);
+        assert_eq!(d.status(), LockStatus::FalseLock);
+        // and only passing the test again clears the flag
+        feed(&mut d, 1.0, 0.0, 300);
+        assert_eq!(d.status(), LockStatus::Locked);
+    }
+
+    #[test]
+    fn a_secondary_peak_or_an_unsettled_loop_is_flagged_after_the_timeout() {
+        let mut d = detector();
+        feed(&mut d, 0.72, 0.0, 1500); // the best secondary peak of G1
+        assert_eq!(d.status(), LockStatus::PullIn);
+        feed(&mut d, 0.72, 0.0, 2);
+        assert_eq!(d.status(), LockStatus::FalseLock);
+        // aligned but still sliding down the peak (v = 3e-3 rad, noise 3e-3 rad per epoch)
+        let mut d = detector();
+        feed(&mut d, 0.95, 3e-3, 1502);
+        assert!(d.settle_statistic() > 16.27);
+        assert_eq!(d.status(), LockStatus::FalseLock);
+    }
+
+    #[test]
+    fn restart_returns_to_pull_in() {
+        let mut d = detector();
+        feed(&mut d, 0.5, 0.0, 2000);
+        assert_eq!(d.status(), LockStatus::FalseLock);
+        d.restart();
+        assert_eq!(d.status(), LockStatus::PullIn);
+        assert!(!LockConfig {
+            unlock_threshold: 0.95,
+            ..LockConfig::<f64>::default()
+        }
+        .is_valid());
+    }
+}
