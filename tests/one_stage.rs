@@ -174,10 +174,10 @@ fn line_bias_states_remove_the_bias_and_cost_little() {
     );
 }
 
-fn filter<T: gnss_attitude::Real>(
+fn filter<T: gnss_attitude::Real, const N: usize>(
     mode: FilterMode,
     estimate: EstimatedAngles,
-) -> OneStageFilter<T> {
+) -> OneStageFilter<T, N> {
     let mut config = OneStageConfig::<T>::gps_l1(mode, nalgebra::convert(2.0));
     config.wavelength_m = nalgebra::convert(WAVELENGTH_M);
     config.estimate = estimate;
@@ -207,8 +207,8 @@ fn to_f64(o: &SatelliteObservation<f32>) -> SatelliteObservation<f64> {
 fn satellites_come_and_go_without_a_reset_and_f32_follows_f64() {
     let sky = sky_g1(8);
     let mut source = IqFastPath::new(&sky, 40.0, [0.0; 3], 7);
-    let mut f32_filter = filter::<f32>(DEFAULT, EstimatedAngles::BETA_ONLY);
-    let mut f64_filter = filter::<f64>(DEFAULT, EstimatedAngles::BETA_ONLY);
+    let mut f32_filter = filter::<f32, 2>(DEFAULT, EstimatedAngles::BETA_ONLY);
+    let mut f64_filter = filter::<f64, 2>(DEFAULT, EstimatedAngles::BETA_ONLY);
     let c_rb = rotation_about_y(0.0);
     let mut obs = Vec::new();
     let mut worst_diff = 0.0f64;
@@ -251,7 +251,7 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
     // mean slope for a small offset too (times the non-coherent factor I₁/I₀ ≈ 0.99).
     let sky = sky_g1(8);
     let j_host = information_rate(0.0, &sky, 40.0) * EPOCH_S;
-    let f = filter::<f64>(DEFAULT, EstimatedAngles::BETA_ONLY);
+    let f = filter::<f64, 2>(DEFAULT, EstimatedAngles::BETA_ONLY);
     let mut source = IqFastPath::new(&sky, 40.0, [0.0; 3], 3);
     let mut obs = Vec::new();
     let (mut sum, mut sum_sq, mut j_core) = (0.0, 0.0, 0.0);
@@ -284,7 +284,7 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
     let mut config = *f.config();
     config.estimate = EstimatedAngles::BETA_ONLY;
     let prior = Prior::new(Paper003Angles::new(0.0, delta, 0.0), 0.01, 0.005);
-    let shifted = OneStageFilter::new(config, *f.array(), &prior).expect("filter");
+    let shifted = OneStageFilter::<f64, 2>::new(config, *f.array(), &prior).expect("filter");
     let mut sum = 0.0;
     for k in 0..n {
         source.epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs);
@@ -305,7 +305,7 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
 fn bad_epochs_are_rejected_and_leave_the_filter_unchanged() {
     let sky = sky_g1(8);
     let mut source = IqFastPath::new(&sky, 40.0, [0.0; 3], 5);
-    let mut f = filter::<f32>(DEFAULT, EstimatedAngles::ALL);
+    let mut f = filter::<f32, 6>(DEFAULT, EstimatedAngles::ALL);
     let mut obs = Vec::new();
     for k in 0..300 {
         source.epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs);

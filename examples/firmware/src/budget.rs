@@ -11,7 +11,12 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_semihosting::hprintln;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::selftest::ConstantVelocityModel;
-use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector4};
+use gnss_attitude::attitude::one_stage::{
+    AntennaArray, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
+    PromptIq, SatelliteObservation, MAX_SATELLITES,
+};
+use gnss_attitude::geometry::Paper003Angles;
+use nalgebra::{ComplexField, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -67,6 +72,7 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
 /// Every budget of the firmware, in region order.
 pub fn run_all() {
     ekf_budgets();
+    one_stage_budgets();
 }
 
 fn ekf_budgets() {
@@ -101,4 +107,66 @@ fn ekf_budgets() {
         let a = black_box(&mut six).predict(black_box(&f), black_box(&q)).is_ok();
         a && six.update_sequential(black_box(&y), &h, &r_diag, None).is_ok()
     });
+}
+
+/// `n ≤ 12` satellites spread over the sky with noise-free-plus-wobble prompt outputs at
+/// 40 dB-Hz (the bench's data), on the stack.
+fn one_stage_observations(
+    array: &AntennaArray<f32>,
+) -> [SatelliteObservation<f32>; MAX_SATELLITES] {
+    let truth = Paper003Angles::new(0.001, -0.002, 0.0015);
+    let model = PhaseModel::new(array, 0.190_293_7, &truth);
+    let amp = ComplexField::sqrt(20.0f32) * 40.0;
+    let mut out = [SatelliteObservation::default(); MAX_SATELLITES];
+    for (i, o) in out.iter_mut().enumerate() {
+        let az = i as f32 * 0.52;
+        let el = 0.15 + 1.3 * i as f32 / MAX_SATELLITES as f32;
+        let los = [
+            ComplexField::cos(el) * ComplexField::cos(az),
+            ComplexField::cos(el) * ComplexField::sin(az),
+            ComplexField::sin(el),
+        ];
+        let psi = model.phases(&Vector3::from(los));
+        let mut prompt = PromptIq::default();
+        for (p, (pi, pq)) in prompt.i.iter_mut().zip(prompt.q.iter_mut()).enumerate() {
+            let th = 0.3 * i as f32 + psi[p];
+            let wobble = 4.0 * ComplexField::sin((i * 3 + p) as f32);
+            *pi = amp * ComplexField::cos(th) + wobble;
+            *pq = amp * ComplexField::sin(th) - wobble;
+        }
+        *o = SatelliteObservation { id: i as u8 + 1, los, prompt, noise_var: 1600.0, cn0_dbhz: 40.0 };
+    }
+    out
+}
+
+fn one_stage_budgets() {
+    let Ok(array) = AntennaArray::paper_triangle(1.5f32) else { return };
+    let obs = one_stage_observations(&array);
+    one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, Gaussian approx., 3 angles + 2 biases (N = 8)", FilterMode::GaussianApproximation, EstimatedAngles::ALL, true, MAX_SATELLITES);
+    one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, constant gain, 3 angles + 2 biases (N = 8)", FilterMode::ConstantGain, EstimatedAngles::ALL, true, MAX_SATELLITES);
+    one_stage_budget::<2>(&array, &obs, "one-stage step, 12 sats, Gaussian approx., beta only (N = 2)", FilterMode::GaussianApproximation, EstimatedAngles::BETA_ONLY, false, MAX_SATELLITES);
+    one_stage_budget::<2>(&array, &obs, "one-stage step, 8 sats, Gaussian approx., beta only (paper, N = 2)", FilterMode::GaussianApproximation, EstimatedAngles::BETA_ONLY, false, 8);
+}
+
+#[allow(clippy::too_many_arguments)]
+fn one_stage_budget<const N: usize>(
+    array: &AntennaArray<f32>,
+    obs: &[SatelliteObservation<f32>; MAX_SATELLITES],
+    name: &str,
+    mode: FilterMode,
+    estimate: EstimatedAngles,
+    bias: bool,
+    n: usize,
+) {
+    let prior = Prior::new(Paper003Angles::new(0.0, 0.0, 0.0), 0.01, 0.001);
+    let mut config = OneStageConfig::gps_l1(mode, 2.0);
+    config.estimate = estimate;
+    config.line_bias_states = bias;
+    let Ok(mut filter) = OneStageFilter::<f32, N>::new(config, *array, &prior) else { return };
+    let Some(epoch) = obs.get(..n) else { return };
+    // a few epochs first, so that the measured one is a steady-state step
+    for _ in 0..20 {
+        let _ = filter.step(epoch);
+    }
+    let _ = measure(name, || black_box(&mut filter).step(black_box(epoch)).is_ok());
 }

@@ -13,6 +13,10 @@ use core::hint::black_box;
 use cortex_m_rt::entry;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
+use gnss_attitude::attitude::one_stage::{
+    satellite_terms, AntennaArray, BesselRatio, FilterMode, OneStageConfig, OneStageFilter, Prior,
+    SatelliteObservation, MAX_SATELLITES,
+};
 use gnss_attitude::selftest::run_ekf_self_test;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
@@ -46,8 +50,45 @@ fn main() -> ! {
     let _ = black_box(q.to_rotation_vector());
     let _ = black_box(q.normalize());
     let _ = black_box(run_ekf_self_test());
+    one_stage();
     loop {
         cortex_m::asm::nop();
+    }
+}
+
+/// The one-stage filter's entry points on opaque data.
+fn one_stage() {
+    let v = || black_box(nalgebra::Vector3::new(0.1f32, 0.2, 0.3));
+    let _ = black_box(BesselRatio::at(black_box(61.0f32)));
+    let z = black_box([nalgebra::Complex::new(1.0f32, 2.0); 3]);
+    let _ = black_box(satellite_terms(&z, &v(), black_box(10.0)));
+    let Ok(array) = AntennaArray::new(v(), v() * 2.0, v() + nalgebra::Vector3::x()) else {
+        return;
+    };
+    let prior = match Prior::from_attitude(&black_box(Matrix3::identity()), &black_box(Matrix3::identity()), black_box(0.01)) {
+        Ok(p) => p,
+        Err(_) => black_box(Prior::new(gnss_attitude::geometry::Paper003Angles::new(0.0, 0.0, 0.0), 0.01, 0.001)),
+    };
+    let mut config = OneStageConfig::gps_l1(black_box(FilterMode::GaussianApproximation), black_box(2.0));
+    config.line_bias_states = black_box(true);
+    let config = black_box(config);
+    let prior = black_box(prior);
+    if let Ok(mut f) = OneStageFilter::<f32, 8>::new(config, black_box(array), &prior) {
+        let obs: [SatelliteObservation<f32>; MAX_SATELLITES] = black_box([SatelliteObservation::default(); MAX_SATELLITES]);
+        let epoch = obs.get(..black_box(12usize)).unwrap_or(&[]);
+        let _ = black_box(f.step(epoch));
+        let _ = black_box(f.information(epoch));
+        let _ = black_box(f.reinitialize(&prior));
+        let _ = black_box((f.angles(), f.rates(), f.line_bias(), f.angle_covariance(), f.lock_status()));
+    }
+    let mut beta = config;
+    beta.estimate = black_box(gnss_attitude::attitude::one_stage::EstimatedAngles::BETA_ONLY);
+    beta.line_bias_states = black_box(false);
+    if let Ok(mut f) = OneStageFilter::<f32, 2>::new(beta, black_box(array), &prior) {
+        let obs: [SatelliteObservation<f32>; MAX_SATELLITES] = black_box([SatelliteObservation::default(); MAX_SATELLITES]);
+        let epoch = obs.get(..black_box(8usize)).unwrap_or(&[]);
+        let _ = black_box(f.step(epoch));
+        let _ = black_box(f.angles());
     }
 }
 

@@ -7,6 +7,8 @@ use nalgebra::{Matrix3, Vector3};
 use crate::geometry::Paper003Angles;
 use crate::{real, OneStageError, Real};
 
+use super::trig::sin_cos;
+
 /// The three antennas, in the order of the paper: A, B, C.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -98,9 +100,17 @@ impl<T: Real> AntennaArray<T> {
 /// `∂U/∂α`, `∂U/∂β`, `∂U/∂γ` of eq. (2) as printed, `U = R_z(γ) R_y(β) R_x'(α)` with the
 /// passive `R_x'(α) = R_x(−α)`.
 pub fn paper003_partials<T: Real>(angles: &Paper003Angles<T>) -> [Matrix3<T>; 3] {
-    let (sa, ca) = angles.alpha.sin_cos();
-    let (sb, cb) = angles.beta.sin_cos();
-    let (sg, cg) = angles.gamma.sin_cos();
+    paper003_rotation_and_partials(angles).1
+}
+
+/// `U(α)` of eq. (2) and its three partial derivatives from one evaluation of the sines and
+/// cosines (the fast single-precision ones of [`super::trig`]).
+pub(crate) fn paper003_rotation_and_partials<T: Real>(
+    angles: &Paper003Angles<T>,
+) -> (Matrix3<T>, [Matrix3<T>; 3]) {
+    let (sa, ca) = sin_cos(angles.alpha);
+    let (sb, cb) = sin_cos(angles.beta);
+    let (sg, cg) = sin_cos(angles.gamma);
     let (o, l) = (T::zero(), T::one());
     let rz = Matrix3::new(cg, -sg, o, sg, cg, o, o, o, l);
     let ry = Matrix3::new(cb, o, sb, o, l, o, -sb, o, cb);
@@ -109,7 +119,8 @@ pub fn paper003_partials<T: Real>(angles: &Paper003Angles<T>) -> [Matrix3<T>; 3]
     let drz = Matrix3::new(-sg, -cg, o, cg, -sg, o, o, o, o);
     let dry = Matrix3::new(-sb, o, cb, o, o, o, -cb, o, -sb);
     let drx = Matrix3::new(o, o, o, o, -sa, ca, o, -ca, -sa);
-    [rz * ry * drx, rz * dry * rx, drz * ry * rx]
+    let ry_rx = ry * rx;
+    (rz * ry_rx, [rz * ry * drx, rz * dry * rx, drz * ry_rx])
 }
 
 /// The phase model linearized at one attitude: the antennas' positions in the reference frame,
@@ -131,8 +142,7 @@ impl<T: Real> PhaseModel<T> {
     /// The model at `angles` for carrier wavelength `wavelength_m` (metres; GPS L1
     /// 0.190 293 7 m).
     pub fn new(array: &AntennaArray<T>, wavelength_m: T, angles: &Paper003Angles<T>) -> Self {
-        let u = angles.to_dcm();
-        let du = paper003_partials(angles);
+        let (u, du) = paper003_rotation_and_partials(angles);
         let r = array.positions();
         Self {
             wavenumber: T::two_pi() / wavelength_m,
@@ -225,6 +235,14 @@ mod tests {
             assert!((fd - dj).norm() < 1e-9, "angle {j}: {}", (fd - dj).norm());
         }
         assert!(is_rotation(&a.to_dcm(), 1e-12));
+        let (u, _) = paper003_rotation_and_partials(&a);
+        assert!(
+            (u - a.to_dcm()).norm() < 1e-15,
+            "same U as geometry::Paper003Angles"
+        );
+        let a32 = Paper003Angles::<f32>::new(0.3, -0.7, 1.9);
+        let (u32_, _) = paper003_rotation_and_partials(&a32);
+        assert!((u32_ - a32.to_dcm()).norm() < 1e-6);
     }
 
     #[test]

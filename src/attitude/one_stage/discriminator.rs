@@ -36,6 +36,7 @@ use nalgebra::{Complex, Matrix2, Matrix3, Vector2, Vector3};
 use crate::{real, Real};
 
 use super::bessel::BesselRatio;
+use super::trig::sin_cos;
 
 /// Prompt correlator outputs of one satellite on antennas A, B, C: `Z_P = I_P + jQ_P`, any
 /// consistent unit (counts of a fixed-point correlator, volts).
@@ -67,7 +68,7 @@ impl<T: Real> PromptIq<T> {
 fn derotate<T: Real>(z: &[Complex<T>; 3], psi: &Vector3<T>) -> [Complex<T>; 3] {
     let [za, zb, zc] = *z;
     let rot = |zp: Complex<T>, p: T| {
-        let (s, c) = p.sin_cos();
+        let (s, c) = sin_cos(p);
         zp * Complex::new(c, -s)
     };
     [rot(za, psi.x), rot(zb, psi.y), rot(zc, psi.z)]
@@ -149,8 +150,8 @@ pub fn satellite_terms<T: Real>(
 /// columns `(1, −1, 0)/√2` and `(1, 1, −2)/√6`. The likelihood does not change along
 /// `(1, 1, 1)` (a common phase), so its curvature lives in this plane.
 pub fn difference_basis<T: Real>() -> nalgebra::Matrix3x2<T> {
-    let a = real::<T>(0.5).sqrt();
-    let b = real::<T>(1.0 / 6.0).sqrt();
+    let a = real::<T>(core::f64::consts::FRAC_1_SQRT_2); // 1/√2
+    let b = real::<T>(0.408_248_290_463_863); // 1/√6
     nalgebra::Matrix3x2::new(a, b, -a, b, T::zero(), -(b + b))
 }
 
@@ -165,7 +166,8 @@ pub fn floored_plane_curvature<T: Real>(curvature: &Matrix3<T>, floor: T) -> (Ma
     let half = real::<T>(0.5);
     let (a, b, c) = (h.m11, (h.m12 + h.m21) * half, h.m22);
     let mean = (a + c) * half;
-    let dev = ((a - c) * half).hypot(b);
+    let d = (a - c) * half;
+    let dev = (d * d + b * b).sqrt(); // not hypot: libm's hypotf computes in f64
     let (l1, l2) = (mean + dev, mean - dev);
     if l2 >= floor {
         return (Matrix2::new(a, b, b, c), false);

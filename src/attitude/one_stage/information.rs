@@ -22,7 +22,7 @@ pub struct EpochInformation<T = f32> {
     pub gradient: SVector<T, PARAMETERS>,
     /// The observed information `−∂²F/∂θ∂θᵀ` with each satellite's curvature floored in the
     /// phase-difference plane (the definiteness guard of eq. (12)); positive semi-definite.
-    /// 1/rad².
+    /// 1/rad². Zero in the constant-gain mode, which does not use it.
     pub observed: SMatrix<T, PARAMETERS, PARAMETERS>,
     /// The expected information (discriminator slope) `J_T = Σ_i 2q_{T,i} G_iᵀ Π G_i`,
     /// `Π = I − 11ᵀ/3`, `G_i = ∂ψ_i/∂θ` (spec (a)). 1/rad².
@@ -38,15 +38,29 @@ pub struct EpochInformation<T = f32> {
     pub floored: u8,
 }
 
+impl<T: Real> EpochInformation<T> {
+    /// The angle block `J_αα` of [`Self::expected`], 1/rad².
+    pub fn expected_angles(&self) -> Matrix3<T> {
+        Matrix3::from_fn(|i, j| self.expected.get((i, j)).copied().unwrap_or_else(T::zero))
+    }
+
+    /// The angle part `u_α` of [`Self::gradient`] (eq. (32)), 1/rad.
+    pub fn angle_gradient(&self) -> Vector3<T> {
+        Vector3::from_fn(|i, _| self.gradient.get(i).copied().unwrap_or_else(T::zero))
+    }
+}
+
 /// Sums the satellites' contributions at the model's attitude and the line biases
 /// `line_bias = [b_B, b_C]` (radians). `curvature_floor` is the fraction `κ` of each
 /// satellite's expected information `2q_T` below which an eigenvalue of its observed curvature
-/// is raised.
+/// is raised. The observed curvature is only formed when `observed` is true (the constant-gain
+/// loop does not use it); otherwise [`EpochInformation::observed`] is zero.
 pub(crate) fn epoch_information<T: Real>(
     model: &PhaseModel<T>,
     line_bias: [T; 2],
     observations: &[CheckedObservation<T>],
     curvature_floor: T,
+    observed: bool,
 ) -> EpochInformation<T> {
     let e = difference_basis::<T>();
     let two = real::<T>(2.0);
@@ -67,24 +81,30 @@ pub(crate) fn epoch_information<T: Real>(
         let terms = satellite_terms(&obs.z, &psi, obs.q_t);
         // G_i = ∂ψ_i/∂θ (3×5): eqs. (26)–(28) for the angles, unit columns for b_B, b_C
         let jac: Matrix3<T> = model.jacobian(&obs.los);
-        let mut g = SMatrix::<T, 3, PARAMETERS>::zeros();
-        g.fixed_view_mut::<3, 3>(0, 0).copy_from(&jac);
-        g.m24 = T::one();
-        g.m35 = T::one();
+        let o = T::zero();
+        let l = T::one();
+        #[rustfmt::skip]
+        let g = SMatrix::<T, 3, PARAMETERS>::new(
+            jac.m11, jac.m12, jac.m13, o, o,
+            jac.m21, jac.m22, jac.m23, l, o,
+            jac.m31, jac.m32, jac.m33, o, l,
+        );
         // eq. (32): u_θ = G_iᵀ ∂F_i/∂ψ
         info.gradient += g.transpose() * terms.gradient;
         // the curvature lives in the difference plane: M_i = Eᵀ G_i (2×5), Π = E Eᵀ
         let m: Matrix2x5<T> = e.transpose() * g;
-        let (h, floored) =
-            floored_plane_curvature(&terms.curvature, curvature_floor * two * obs.q_t);
-        info.observed += m.transpose() * h * m;
+        if observed {
+            let (h, floored) =
+                floored_plane_curvature(&terms.curvature, curvature_floor * two * obs.q_t);
+            info.observed += m.transpose() * h * m;
+            if floored {
+                info.floored = info.floored.saturating_add(1);
+            }
+        }
         info.expected += m.transpose() * m * (two * obs.q_t);
         info.coherent_power += terms.x_squared - six;
         info.aligned_power += (terms.antenna_power - six) * real(3.0);
         info.satellites = info.satellites.saturating_add(1);
-        if floored {
-            info.floored = info.floored.saturating_add(1);
-        }
     }
     info
 }

@@ -54,14 +54,21 @@
 //! biases are constant while the attitude moves.
 
 mod array;
-mod bessel;
+pub mod bessel;
 mod config;
-mod discriminator;
+pub mod discriminator;
 mod filter;
 mod information;
 mod input;
-mod lock;
+mod layout;
+mod linalg;
+pub mod lock;
 mod prior;
+mod trig;
+mod update;
+
+#[cfg(test)]
+mod tests;
 
 pub use array::{paper003_partials, Antenna, AntennaArray, PhaseModel};
 pub use bessel::BesselRatio;
@@ -70,8 +77,9 @@ pub use discriminator::{
     coherent_sum, difference_basis, floored_plane_curvature, satellite_terms, PromptIq,
     SatelliteTerms,
 };
-pub use filter::{EpochReport, OneStageFilter, STATES};
+pub use filter::{EpochReport, OneStageFilter};
 pub use information::{EpochInformation, PARAMETERS};
 pub use input::{SatelliteObservation, MAX_SATELLITES};
+pub use layout::StateLayout;
 pub use lock::{LockConfig, LockDetector, LockStatus};
 pub use prior::Prior;

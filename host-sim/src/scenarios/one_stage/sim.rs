@@ -4,7 +4,7 @@
 use anyhow::anyhow;
 use gnss_attitude::attitude::one_stage::{
     AntennaArray, EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
-    SatelliteObservation,
+    SatelliteObservation, StateLayout,
 };
 use gnss_attitude::geometry::Paper003Angles;
 use nalgebra::Matrix3;
@@ -185,7 +185,7 @@ fn wrap(a: f64) -> f64 {
 /// Runs the filter of `cfg` for `cfg.duration_s` on data drawn with `seed`.
 pub fn simulate(cfg: &RunConfig, seed: u64) -> anyhow::Result<RunResult> {
     let sky = sky_g1(cfg.satellites);
-    let mut source: Box<dyn EpochSource> = match cfg.input {
+    let source: Box<dyn EpochSource> = match cfg.input {
         InputPath::IqFastPath => Box::new(IqFastPath::new(&sky, cfg.cn0_dbhz, cfg.line_bias, seed)),
     };
     let mut config = OneStageConfig::<f32>::gps_l1(cfg.mode, cfg.loop_bandwidth_hz as f32);
@@ -201,8 +201,25 @@ pub fn simulate(cfg: &RunConfig, seed: u64) -> anyhow::Result<RunResult> {
         PRIOR_RATE_SIGMA as f32,
     );
     prior.line_bias_variance = [0.25; 2];
-    let mut filter = OneStageFilter::new(config, array, &prior).map_err(|e| anyhow!("{e}"))?;
+    match StateLayout::of(&config).dimension {
+        2 => run::<2>(cfg, source, config, array, &prior),
+        4 => run::<4>(cfg, source, config, array, &prior),
+        6 => run::<6>(cfg, source, config, array, &prior),
+        8 => run::<8>(cfg, source, config, array, &prior),
+        n => Err(anyhow!("no filter instance with {n} states")),
+    }
+}
 
+/// The epoch loop for a filter with `N` states.
+fn run<const N: usize>(
+    cfg: &RunConfig,
+    mut source: Box<dyn EpochSource>,
+    config: OneStageConfig<f32>,
+    array: AntennaArray<f32>,
+    prior: &Prior<f32>,
+) -> anyhow::Result<RunResult> {
+    let mut filter =
+        OneStageFilter::<f32, N>::new(config, array, prior).map_err(|e| anyhow!("{e}"))?;
     let bound = cfg.bound_arcmin();
     let steps = (cfg.duration_s / EPOCH_S).round() as usize;
     let first_kept = (cfg.discard * steps as f64).round() as usize;
