@@ -7,14 +7,16 @@ use super::lock::LockConfig;
 /// GPS L1 carrier wavelength, m (`c / 1575.42 MHz`).
 pub const GPS_L1_WAVELENGTH_M: f64 = 299_792_458.0 / 1_575.42e6;
 
-/// How the filter turns the discriminators into a state update.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// How the filter turns the discriminators into a state update. The default is the Gaussian
+/// approximation (see the module documentation for why).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FilterMode {
     /// The Gaussian-approximation filter of eqs. (9)–(12): covariance propagated (11), the
     /// information update `D⁻¹ = D̃⁻¹ − ∂²F/∂X∂Xᵀ` (12, corrected) with the observed curvature
     /// floored per satellite, and the state moved by `D cᵀ u` (9). Its process noise is set
     /// every epoch from the loop bandwidth (see [`OneStageConfig::process_noise`]).
+    #[default]
     GaussianApproximation,
     /// The paper's simulated tracker: the discriminator normalized by its expected slope
     /// `J_T`, then a second-order loop with constant gains `K1 = √2 ω_n T`, `K2 = ω_n² T`,
