@@ -38,11 +38,22 @@
 //!   `J_T = Σ_i 2q_T G_iᵀ Π G_i`, then `K1 = √2 ω_n T`, `K2 = ω_n² T`, `ω_n = Δf/0.53`.
 //!
 //! Both sit at the loop-limited bound `σ = √(2Δf/J_β)` in steady state (the steady-state
-//! Kalman filter of this model *is* a second-order loop with `ζ = 1/√2`). The Gaussian
-//! approximation is the recommended form: it weighs each satellite by its observed SNR,
-//! starts from the prior's covariance (so a good prior pulls in at once and a poor one is not
-//! over-trusted), estimates the line biases with decreasing gains instead of a fixed slow
-//! loop, and reports a covariance; see the crate README for the measured comparison.
+//! Kalman filter of this model *is* a second-order loop with `ζ = 1/√2`); host-sim's
+//! `one-stage` scenario measures 0.707′ and 0.706′ against 0.694′ for the paper's case.
+//! **The Gaussian approximation is the default** ([`FilterMode::default`]) because it is the
+//! better filter everywhere except cost: it starts from the prior's covariance, so it pulls in
+//! from a 5° error in under 0.1 s where a 2 Hz constant-gain loop needs about 2 s to settle
+//! (and is flagged by the lock detector meanwhile); it learns line biases with decreasing gains
+//! (σ_β +4 % against +134 % for a 0.05 Hz constant-gain bias loop over the same minute); it
+//! weighs each satellite by its observed curvature and reports a covariance for whatever
+//! fuses the attitude next. It costs about twice the instructions of the constant-gain loop
+//! (56 k against 25 k per 1 ms epoch with 12 satellites and every state, Cortex-M4F).
+//!
+//! # State dimension
+//!
+//! The state holds only what is estimated ([`StateLayout`]); its dimension `N` is a const
+//! generic of [`OneStageFilter`]: 2 for the paper's β-only filter `[β, β̇]`, 4 with line
+//! biases, 6 for three angles, 8 for three angles and biases (the default).
 //!
 //! # Line biases
 //!

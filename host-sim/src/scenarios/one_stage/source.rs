@@ -6,6 +6,23 @@
 //! the statistics of an ideal correlator. The sample-level path (three-antenna samples → the
 //! core's fixed-point correlators and tracking → the same observations) will be a second
 //! implementation of the trait, driven by the same loop.
+//!
+//! # What the sample-level source needs from the signal chain
+//!
+//! * Per 1 ms code epoch and tracked PRN: the prompt I and Q of antennas A, B, C from one
+//!   shared replica (one code and carrier NCO), in one integer scale; which physical channel is
+//!   A, B, C; the sign convention of Q (the filter wants `Z ∝ e^{+jφ}`; the adapter negates Q
+//!   otherwise).
+//! * The noise variance of one component in the same scale (the noise tap), per antenna: the
+//!   likelihood assumes equal SNR on the three antennas, so an adapter divides each antenna's
+//!   I/Q by its own noise standard deviation when the front-end gains differ.
+//! * The C/N0 estimate, and carrier-lock and code-lock flags (unlocked channels are left out);
+//!   bit sync is not needed (`X_i` ignores the data bit) as long as epochs are code periods.
+//! * A receiver time tag per epoch and a way to tell missed epochs (the filter then predicts
+//!   with an empty epoch), so that the line of sight (ephemeris and receiver position, not the
+//!   chain's job) and `T` are right.
+//! * A notice when the front end's synthesizer re-locks (the line biases jump; the filter's
+//!   bias variance must be reopened by re-initialization).
 
 use gnss_attitude::attitude::one_stage::{PromptIq, SatelliteObservation};
 use nalgebra::Matrix3;
