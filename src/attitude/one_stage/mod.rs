@@ -44,7 +44,7 @@
 //! better filter everywhere except cost: it starts from the prior's covariance, so it pulls in
 //! from a 5° error in under 0.1 s where a 2 Hz constant-gain loop needs about 2 s to settle
 //! (and is flagged by the lock detector meanwhile); it learns line biases with decreasing gains
-//! (σ_β +4 % against +134 % for a 0.05 Hz constant-gain bias loop over the same minute); it
+//! (`σ_β` +4 % against +134 % for a 0.05 Hz constant-gain bias loop over the same minute); it
 //! weighs each satellite by its observed curvature and reports a covariance for whatever
 //! fuses the attitude next. It costs about twice the instructions of the constant-gain loop
 //! (56 k against 25 k per 1 ms epoch with 12 satellites and every state, Cortex-M4F).
