@@ -41,10 +41,11 @@ impl<T: Real> Prior<T> {
     }
 
     /// A prior from an attitude solution: the body-to-reference DCM `c_rb` and the covariance
-    /// (rad²) of its error as a rotation vector `δθ` in the reference frame,
-    /// `C_true = exp([δθ]×) C_rb` (the form a snapshot solver reports). The covariance is
-    /// mapped onto the angles through `δθ = E(α) δα`, `E`'s columns being
-    /// `vee(∂U/∂α_j Uᵀ)`. Rates and biases as in [`Self::new`] with `rate_sigma`.
+    /// (rad²) of its error as a **body-frame** rotation vector `δ`, `C_true = C_rb exp([δ]×)`
+    /// (the form `attitude::snapshot::SnapshotSolution` reports: pass its `c_rb` and
+    /// `covariance`). The covariance is taken to the reference frame, `δθ = C_rb δ`, and mapped
+    /// onto the angles through `δθ = E(α) δα`, `E`'s columns being `vee(∂U/∂α_j Uᵀ)`. Rates
+    /// and biases as in [`Self::new`] with `rate_sigma`.
     ///
     /// # Errors
     /// [`OneStageError::NonFiniteInput`]; [`OneStageError::GimbalLock`] when `|cos β| < 1e-3`
@@ -72,6 +73,8 @@ impl<T: Real> Prior<T> {
             return Err(OneStageError::InvalidCovariance);
         }
         let u = angles.to_dcm();
+        // body-frame δ to reference-frame δθ = U δ
+        let sym = u * sym * u.transpose();
         let [da, db, dg] = paper003_partials(&angles);
         let e = Matrix3::from_columns(&[
             vee(&(da * u.transpose())),
@@ -119,8 +122,9 @@ mod tests {
     fn rotation_vector_covariance_maps_onto_the_angles() {
         let angles = Paper003Angles::<f64>::new(0.2, -0.4, 1.0);
         let u = angles.to_dcm();
-        // an error of 1e-3 rad about the reference Z changes only γ
-        let cov = Matrix3::from_diagonal(&Vector3::new(1e-10, 1e-10, 1e-6));
+        // an error of 1e-3 rad about the reference Z (body axis Uᵀ z) changes only γ
+        let cov_ref = Matrix3::from_diagonal(&Vector3::new(1e-10, 1e-10, 1e-6));
+        let cov = u.transpose() * cov_ref * u;
         let p = Prior::from_attitude(&u, &cov, 0.01).unwrap();
         assert!((p.angles.beta - angles.beta).abs() < 1e-12);
         assert!((p.angle_covariance.m33 - 1e-6).abs() < 1e-8);
