@@ -445,3 +445,63 @@ impl fmt::Display for CalibrationError {
 }
 
 impl core::error::Error for CalibrationError {}
+
+/// Errors of the one-stage attitude filter ([`crate::attitude::one_stage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum OneStageError {
+    /// An observation, prior, configuration or antenna position held NaN or infinity.
+    NonFiniteInput,
+    /// A configuration value is outside its domain: a non-positive wavelength, epoch or
+    /// bandwidth, a negative process noise, a lock threshold outside `(0, 1]`, no estimated
+    /// angle.
+    InvalidConfig,
+    /// The antenna array is degenerate: two antennas coincide or all three are collinear.
+    DegenerateArray,
+    /// An observation is unusable: a line of sight that is not a unit vector (length off by more
+    /// than 1e-3), a noise variance that is not positive, or a C/N0 outside 0..=90 dB-Hz.
+    InvalidObservation,
+    /// More satellites in one epoch than [`MAX_SATELLITES`](crate::attitude::one_stage::MAX_SATELLITES).
+    TooManySatellites,
+    /// A prior covariance is not symmetric positive definite.
+    InvalidCovariance,
+    /// The prior attitude is at the gimbal lock of the paper's angles (`cos β` below 1e-3),
+    /// where a rotation-vector covariance cannot be mapped onto α, β, γ.
+    GimbalLock,
+    /// The filter step produced non-finite numbers or lost definiteness from finite input; the
+    /// filter is unchanged.
+    Numerical,
+}
+
+impl Error for OneStageError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFiniteInput => ErrorKind::NonFinite,
+            Self::InvalidConfig
+            | Self::DegenerateArray
+            | Self::InvalidObservation
+            | Self::TooManySatellites => ErrorKind::InvalidInput,
+            Self::InvalidCovariance => ErrorKind::NotPositiveDefinite,
+            Self::GimbalLock => ErrorKind::Unobservable,
+            Self::Numerical => ErrorKind::Numerical,
+        }
+    }
+}
+
+impl fmt::Display for OneStageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::NonFiniteInput => "non-finite one-stage filter input",
+            Self::InvalidConfig => "invalid one-stage filter configuration",
+            Self::DegenerateArray => "antenna array is degenerate (coincident or collinear)",
+            Self::InvalidObservation => "unusable satellite observation",
+            Self::TooManySatellites => "too many satellites in one epoch",
+            Self::InvalidCovariance => "prior covariance is not positive definite",
+            Self::GimbalLock => "prior attitude at the gimbal lock of the paper's angles",
+            Self::Numerical => "one-stage filter step failed numerically",
+        })
+    }
+}
+
+impl core::error::Error for OneStageError {}

@@ -37,6 +37,7 @@
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
 //! | [`attitude`] | Attitude estimators: snapshot from carrier phase with ambiguity resolution (paper 002); direction-cosine, multi-structure and rigid-body filters (paper 000) |
 //! | [`gyro`] | Gyro propagation and in-flight calibration against a reference attitude (paper 001) |
+//! | [`attitude`] | The attitude estimators (paper 003's one-stage filter, ...) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
@@ -83,7 +84,7 @@ mod defmt_impls;
 
 pub use error::{
     AmbiguityError, CalibrationError, DcmError, ErrorKind, FilterError, GeometryError,
-    SnapshotError,
+    OneStageError, SnapshotError,
 };
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the

@@ -29,6 +29,11 @@
 //! * [`rigid_body`]: the three-parameter error-state filter on the same data, which the paper
 //!   does not have.
 //! * [`baseline_epoch`] holds their inputs and [`filter_estimate`] their output.
+//!
+//! **One-stage filter (paper 003)**, straight from per-antenna prompt I/Q:
+//! * [`one_stage`]: attitude angles and rates with the common carrier phase and the data bit
+//!   averaged out (product of I₀ Bessel functions); Gaussian-approximation and constant-gain
+//!   forms, lock detector, optional line-bias states.
 
 pub mod ambiguity;
 pub mod baseline_epoch;
@@ -41,6 +46,7 @@ mod givens;
 mod integer_search;
 pub mod lambda;
 pub mod multi_structure;
+pub mod one_stage;
 pub mod paper002;
 pub mod range_model;
 pub mod rigid_body;

@@ -7,22 +7,24 @@
 
 use core::hint::black_box;
 use core::sync::atomic::{AtomicU32, Ordering};
-
 use cortex_m_semihosting::hprintln;
+use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
+use gnss_attitude::selftest::ConstantVelocityModel;
 use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::multi_structure::MultiStructureFilter;
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
-use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{rot_x, rot_y, rot_z, Quaternion};
-use gnss_attitude::selftest::ConstantVelocityModel;
-use nalgebra::{Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
-use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::gyro::{
     default_rank_tolerance, CalibratorConfig, EpochOutcome, LeastSquaresAccumulator,
     NormalEquations, PaperCalibrator, SqrtInformation,
 };
-use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
+use gnss_attitude::attitude::one_stage::{
+    AntennaArray as OneStageArray, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
+    PromptIq, SatelliteObservation, MAX_SATELLITES,
+};
+use gnss_attitude::geometry::Paper003Angles;
+use nalgebra::{ComplexField, Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -81,6 +83,7 @@ pub fn run_all() {
     snapshot_budgets();
     dcm_budgets();
     gyro_budgets();
+    one_stage_budgets();
 }
 
 fn ekf_budgets() {
@@ -166,6 +169,7 @@ fn resolve_once(
 ) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::AmbiguityError> {
     resolver.resolve(phases)
 }
+
 /// One step of each paper-000 filter on the paper's array (noise-free epoch near t = 1 s).
 fn dcm_budgets() {
     let Ok(array) = AntennaArray::from_baselines(
@@ -206,6 +210,8 @@ fn dcm_budgets() {
             black_box(&mut rigid).step(black_box(&epoch)).is_ok()
         });
     }
+}
+
 /// Paper 001 §6 on the target: 30 s of the paper's rates with its gyro errors against a perfect
 /// reference (131 epochs, 393 rows), then one of each step on the filled accumulators.
 fn gyro_budgets() {
@@ -306,4 +312,66 @@ fn gyro_budgets() {
         },
     );
     hprintln!("gyro budgets: Givens solve rank {:?}", solved);
+}
+
+/// `n ≤ 12` satellites spread over the sky with noise-free-plus-wobble prompt outputs at
+/// 40 dB-Hz (the bench's data), on the stack.
+fn one_stage_observations(
+    array: &OneStageArray<f32>,
+) -> [SatelliteObservation<f32>; MAX_SATELLITES] {
+    let truth = Paper003Angles::new(0.001, -0.002, 0.0015);
+    let model = PhaseModel::new(array, 0.190_293_7, &truth);
+    let amp = ComplexField::sqrt(20.0f32) * 40.0;
+    let mut out = [SatelliteObservation::default(); MAX_SATELLITES];
+    for (i, o) in out.iter_mut().enumerate() {
+        let az = i as f32 * 0.52;
+        let el = 0.15 + 1.3 * i as f32 / MAX_SATELLITES as f32;
+        let los = [
+            ComplexField::cos(el) * ComplexField::cos(az),
+            ComplexField::cos(el) * ComplexField::sin(az),
+            ComplexField::sin(el),
+        ];
+        let psi = model.phases(&Vector3::from(los));
+        let mut prompt = PromptIq::default();
+        for (p, (pi, pq)) in prompt.i.iter_mut().zip(prompt.q.iter_mut()).enumerate() {
+            let th = 0.3 * i as f32 + psi[p];
+            let wobble = 4.0 * ComplexField::sin((i * 3 + p) as f32);
+            *pi = amp * ComplexField::cos(th) + wobble;
+            *pq = amp * ComplexField::sin(th) - wobble;
+        }
+        *o = SatelliteObservation { id: i as u8 + 1, los, prompt, noise_var: 1600.0, cn0_dbhz: 40.0 };
+    }
+    out
+}
+
+fn one_stage_budgets() {
+    let Ok(array) = OneStageArray::paper_triangle(1.5f32) else { return };
+    let obs = one_stage_observations(&array);
+    one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, Gaussian approx., 3 angles + 2 biases (N = 8)", FilterMode::GaussianApproximation, EstimatedAngles::ALL, true, MAX_SATELLITES);
+    one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, constant gain, 3 angles + 2 biases (N = 8)", FilterMode::ConstantGain, EstimatedAngles::ALL, true, MAX_SATELLITES);
+    one_stage_budget::<2>(&array, &obs, "one-stage step, 12 sats, Gaussian approx., beta only (N = 2)", FilterMode::GaussianApproximation, EstimatedAngles::BETA_ONLY, false, MAX_SATELLITES);
+    one_stage_budget::<2>(&array, &obs, "one-stage step, 8 sats, Gaussian approx., beta only (paper, N = 2)", FilterMode::GaussianApproximation, EstimatedAngles::BETA_ONLY, false, 8);
+}
+
+#[allow(clippy::too_many_arguments)]
+fn one_stage_budget<const N: usize>(
+    array: &OneStageArray<f32>,
+    obs: &[SatelliteObservation<f32>; MAX_SATELLITES],
+    name: &str,
+    mode: FilterMode,
+    estimate: EstimatedAngles,
+    bias: bool,
+    n: usize,
+) {
+    let prior = Prior::new(Paper003Angles::new(0.0, 0.0, 0.0), 0.01, 0.001);
+    let mut config = OneStageConfig::gps_l1(mode, 2.0);
+    config.estimate = estimate;
+    config.line_bias_states = bias;
+    let Ok(mut filter) = OneStageFilter::<f32, N>::new(config, *array, &prior) else { return };
+    let Some(epoch) = obs.get(..n) else { return };
+    // a few epochs first, so that the measured one is a steady-state step
+    for _ in 0..20 {
+        let _ = filter.step(epoch);
+    }
+    let _ = measure(name, || black_box(&mut filter).step(black_box(epoch)).is_ok());
 }

@@ -9,20 +9,23 @@
 #![no_main]
 
 use core::hint::black_box;
-
 use cortex_m_rt::entry;
+use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
+use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
+use gnss_attitude::selftest::run_ekf_self_test;
 use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch};
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use gnss_attitude::attitude::multi_structure::{fuse, MultiStructureFilter};
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
-use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
-use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
-use gnss_attitude::selftest::run_ekf_self_test;
 use gnss_attitude::gyro::{
     lsq::singular_values, AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
     GyroCalibrator, LeastSquaresAccumulator, NormalEquations, PaperCalibrator, PulseDecoder,
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
+};
+use gnss_attitude::attitude::one_stage::{
+    satellite_terms, AntennaArray as OneStageArray, BesselRatio, FilterMode, OneStageConfig, OneStageFilter, Prior,
+    SatelliteObservation, MAX_SATELLITES,
 };
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
@@ -59,6 +62,7 @@ fn main() -> ! {
     snapshot_entry_points();
     dcm_entry_points();
     gyro();
+    one_stage();
     loop {
         cortex_m::asm::nop();
     }
@@ -96,6 +100,8 @@ fn snapshot_entry_points() {
     }
     let pair = WahbaPair { body: v(1.0), reference: v(0.7), weight: black_box(1.0) };
     let _ = black_box(solve_wahba(&[pair, pair]));
+}
+
 /// The paper-000 filters with opaque geometry, configuration and measurements.
 #[inline(never)]
 fn dcm_entry_points() {
@@ -139,6 +145,8 @@ fn dcm_entry_points() {
     }
     let antennas: [Option<nalgebra::Vector3<f32>>; 3] = black_box([None; 3]);
     let _ = black_box(BaselineEpoch::from_antennas(&antennas, &antennas));
+}
+
 #[inline(never)]
 fn gyro() {
     let config = CalibratorConfig::new(black_box(0.02f32)).with_pulses(
@@ -200,6 +208,42 @@ fn gyro() {
     let _ = black_box(singular_values(
         &black_box(SMatrix::<f32, 6, 6>::identity()),
     ));
+}
+
+/// The one-stage filter's entry points on opaque data.
+fn one_stage() {
+    let v = || black_box(nalgebra::Vector3::new(0.1f32, 0.2, 0.3));
+    let _ = black_box(BesselRatio::at(black_box(61.0f32)));
+    let z = black_box([nalgebra::Complex::new(1.0f32, 2.0); 3]);
+    let _ = black_box(satellite_terms(&z, &v(), black_box(10.0)));
+    let Ok(array) = OneStageArray::new(v(), v() * 2.0, v() + nalgebra::Vector3::x()) else {
+        return;
+    };
+    let prior = match Prior::from_attitude(&black_box(Matrix3::identity()), &black_box(Matrix3::identity()), black_box(0.01)) {
+        Ok(p) => p,
+        Err(_) => black_box(Prior::new(gnss_attitude::geometry::Paper003Angles::new(0.0, 0.0, 0.0), 0.01, 0.001)),
+    };
+    let mut config = OneStageConfig::gps_l1(black_box(FilterMode::GaussianApproximation), black_box(2.0));
+    config.line_bias_states = black_box(true);
+    let config = black_box(config);
+    let prior = black_box(prior);
+    if let Ok(mut f) = OneStageFilter::<f32, 8>::new(config, black_box(array), &prior) {
+        let obs: [SatelliteObservation<f32>; MAX_SATELLITES] = black_box([SatelliteObservation::default(); MAX_SATELLITES]);
+        let epoch = obs.get(..black_box(12usize)).unwrap_or(&[]);
+        let _ = black_box(f.step(epoch));
+        let _ = black_box(f.information(epoch));
+        let _ = black_box(f.reinitialize(&prior));
+        let _ = black_box((f.angles(), f.rates(), f.line_bias(), f.angle_covariance(), f.lock_status()));
+    }
+    let mut beta = config;
+    beta.estimate = black_box(gnss_attitude::attitude::one_stage::EstimatedAngles::BETA_ONLY);
+    beta.line_bias_states = black_box(false);
+    if let Ok(mut f) = OneStageFilter::<f32, 2>::new(beta, black_box(array), &prior) {
+        let obs: [SatelliteObservation<f32>; MAX_SATELLITES] = black_box([SatelliteObservation::default(); MAX_SATELLITES]);
+        let epoch = obs.get(..black_box(8usize)).unwrap_or(&[]);
+        let _ = black_box(f.step(epoch));
+        let _ = black_box(f.angles());
+    }
 }
 
 #[panic_handler]

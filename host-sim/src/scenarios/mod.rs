@@ -15,6 +15,7 @@ use serde_json::{json, Map, Value};
 pub mod dcm;
 pub mod gyro_cal;
 pub mod gyro_cal_gnss;
+pub mod one_stage;
 pub mod snapshot;
 pub mod vector_ekf;
 
@@ -24,6 +25,7 @@ pub const SCENARIOS: &[Scenario] = &[
     snapshot::SCENARIO,
     dcm::SCENARIO,
     gyro_cal::SCENARIO,
+    one_stage::SCENARIO,
 ];
 
 /// What `host-sim` runs when called without arguments.

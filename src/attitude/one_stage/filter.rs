@@ -1,0 +1,363 @@
+//! The one-stage filter on `X = [α; α̇]` (plus optional line biases): prediction (7)/(10) and
+//! the per-epoch discriminators; the two update forms are in `update.rs`.
+
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+use crate::ekf::Ekf;
+use crate::geometry::Paper003Angles;
+use crate::{OneStageError, Real};
+
+use super::array::{AntennaArray, PhaseModel};
+use super::config::{FilterMode, OneStageConfig};
+use super::information::{epoch_information, EpochInformation, PARAMETERS};
+use super::input::{CheckedObservation, SatelliteObservation, MAX_SATELLITES};
+use super::layout::StateLayout;
+use super::linalg::{el, regularized_solve, set, wrap};
+use super::lock::{LockDetector, LockStatus};
+use super::prior::Prior;
+
+/// What one epoch did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EpochReport<T = f32> {
+    /// Satellites used.
+    pub satellites: u8,
+    /// The lock detector's verdict after this epoch. Use the attitude only when `Locked`.
+    pub status: LockStatus,
+    /// Smoothed alignment `η̄` (1 at the true peak, see [`super::lock`]).
+    pub alignment: T,
+    /// The lock detector's settle statistic `s` (χ² scale, see [`super::lock`]).
+    pub settle_statistic: T,
+    /// The angle discriminator `u_α` of eq. (32) at the predicted state, 1/rad (α, β, γ;
+    /// zero for angles not estimated).
+    pub angle_discriminator: [T; 3],
+    /// The correction the update applied to the angles, rad.
+    pub angle_step: [T; 3],
+    /// Satellites whose observed curvature needed the floor.
+    pub curvature_floored: u8,
+}
+
+/// The one-stage coherent–noncoherent attitude filter of paper 003.
+///
+/// Every epoch it takes the prompt I/Q of the three antennas for each tracked satellite
+/// ([`SatelliteObservation`]) and moves the attitude angles (eq. (2)), their rates and the
+/// optional line biases so as to climb the likelihood `Σ_i ln I₀(a X_i)` of eq. (15), in which
+/// the common carrier phase and the data bit are averaged out. No per-satellite state is
+/// kept: satellites may appear and disappear from one epoch to the next.
+///
+/// `N` is the state dimension, `2 × (estimated angles) + 2 × (line biases on)`: 2 for the
+/// paper's β-only filter `[β, β̇]`, 4 with line biases, 6 for three angles, 8 for everything
+/// (`[α, β, γ, α̇, β̇, γ̇, b_B, b_C]`, the default); see [`StateLayout`]. Angles not estimated
+/// are held at their prior values. Angles are wrapped to `(−π, π]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OneStageFilter<T = f32, const N: usize = 8> {
+    pub(super) config: OneStageConfig<T>,
+    pub(super) array: AntennaArray<T>,
+    pub(super) layout: StateLayout,
+    /// Values of the angles that are not estimated, rad.
+    pub(super) held: [T; 3],
+    pub(super) ekf: Ekf<N, T>,
+    pub(super) lock: LockDetector<T>,
+    /// Last scheduled process-noise densities per parameter (Gaussian mode), kept for epochs
+    /// without information.
+    pub(super) scheduled_psd: [T; PARAMETERS],
+}
+
+impl<T: Real, const N: usize> OneStageFilter<T, N> {
+    /// A filter for `array` started from `prior`.
+    ///
+    /// # Errors
+    /// [`OneStageError::InvalidConfig`] when [`OneStageConfig::is_valid`] fails or `N` is not
+    /// the dimension the configuration needs ([`StateLayout::dimension`]); the errors of the
+    /// prior ([`OneStageError::NonFiniteInput`], [`OneStageError::InvalidCovariance`]).
+    pub fn new(
+        config: OneStageConfig<T>,
+        array: AntennaArray<T>,
+        prior: &Prior<T>,
+    ) -> Result<Self, OneStageError> {
+        let layout = StateLayout::of(&config);
+        if !config.is_valid() || layout.dimension != N {
+            return Err(OneStageError::InvalidConfig);
+        }
+        let (ekf, held) = Self::initial_state(&layout, prior, config.line_bias_states)?;
+        Ok(Self {
+            lock: LockDetector::new(&config.lock, config.epoch_s),
+            config,
+            array,
+            layout,
+            held,
+            ekf,
+            scheduled_psd: [T::zero(); PARAMETERS],
+        })
+    }
+
+    /// Restarts from a new prior (a snapshot solution, or the caller's after a false lock),
+    /// keeping the configuration; the lock detector returns to pull-in.
+    ///
+    /// # Errors
+    /// As [`Self::new`] for the prior; the filter is then unchanged.
+    pub fn reinitialize(&mut self, prior: &Prior<T>) -> Result<(), OneStageError> {
+        let (ekf, held) = Self::initial_state(&self.layout, prior, self.config.line_bias_states)?;
+        self.ekf = ekf;
+        self.held = held;
+        self.lock.restart();
+        Ok(())
+    }
+
+    fn initial_state(
+        layout: &StateLayout,
+        prior: &Prior<T>,
+        with_bias: bool,
+    ) -> Result<(Ekf<N, T>, [T; 3]), OneStageError> {
+        prior.check(with_bias)?;
+        let mut x = SVector::<T, N>::zeros();
+        let mut p = SMatrix::<T, N, N>::identity();
+        let a = [prior.angles.alpha, prior.angles.beta, prior.angles.gamma].map(wrap);
+        let r = [prior.rates.x, prior.rates.y, prior.rates.z];
+        for i in 0..3 {
+            let (Some(pi), Some(ri)) = (layout.parameter[i], layout.rate[i]) else {
+                continue;
+            };
+            set(&mut x, pi, 0, a[i]);
+            set(&mut x, ri, 0, r[i]);
+            for j in 0..3 {
+                if let (Some(pj), Some(rj)) = (layout.parameter[j], layout.rate[j]) {
+                    set(&mut p, pi, pj, el(&prior.angle_covariance, i, j));
+                    set(&mut p, ri, rj, el(&prior.rate_covariance, i, j));
+                }
+            }
+        }
+        for (k, (&b, &v)) in prior
+            .line_bias
+            .iter()
+            .zip(prior.line_bias_variance.iter())
+            .enumerate()
+        {
+            if let Some(Some(idx)) = layout.parameter.get(3 + k) {
+                set(&mut x, *idx, 0, b);
+                set(&mut p, *idx, *idx, v);
+            }
+        }
+        let ekf = Ekf::new(x, p).map_err(|_| OneStageError::InvalidCovariance)?;
+        Ok((ekf, a))
+    }
+
+    /// The angles (α, β, γ) of a state vector: estimated ones from it, held ones as held.
+    pub(super) fn angles_of(&self, x: &SVector<T, N>) -> [T; 3] {
+        let mut a = self.held;
+        for (ai, idx) in a.iter_mut().zip(self.layout.parameter.iter()) {
+            if let Some(v) = idx.and_then(|i| x.get(i)) {
+                *ai = *v;
+            }
+        }
+        a
+    }
+
+    /// The line biases (`b_B`, `b_C`) of a state vector (zero when not estimated).
+    fn biases_of(&self, x: &SVector<T, N>) -> [T; 2] {
+        let get = |k: usize| {
+            self.layout
+                .parameter
+                .get(k)
+                .copied()
+                .flatten()
+                .and_then(|i| x.get(i).copied())
+                .unwrap_or_else(T::zero)
+        };
+        [get(3), get(4)]
+    }
+
+    /// Transition `F` of eq. (8): `angle ← angle + T · rate` for the estimated angles.
+    pub(super) fn transition(&self) -> SMatrix<T, N, N> {
+        let mut f = SMatrix::<T, N, N>::identity();
+        for (p, r) in self.layout.parameter.iter().zip(self.layout.rate.iter()) {
+            if let (Some(p), Some(r)) = (p, r) {
+                set(&mut f, *p, *r, self.config.epoch_s);
+            }
+        }
+        f
+    }
+
+    /// One epoch: prediction (eq. (10)), the discriminators at the predicted state, the update
+    /// of the configured [`FilterMode`], the lock detector. An empty slice only predicts.
+    ///
+    /// # Errors
+    /// [`OneStageError::TooManySatellites`] for more than [`MAX_SATELLITES`];
+    /// [`OneStageError::NonFiniteInput`] or [`OneStageError::InvalidObservation`] when any
+    /// observation is unusable (drop that channel and call again);
+    /// [`OneStageError::Numerical`] when the step fails numerically. On error the filter is
+    /// unchanged.
+    pub fn step(
+        &mut self,
+        observations: &[SatelliteObservation<T>],
+    ) -> Result<EpochReport<T>, OneStageError> {
+        // eq. (10): X̃ = F X̂
+        let f = self.transition();
+        let x_pred = f * self.ekf.state();
+        let info = self.information_at(&x_pred, observations)?;
+        // the normalized angle discriminator v = J_αα⁻¹ u_α (conditional on the biases)
+        let j_aa = info.expected_angles();
+        let u_a = info.angle_gradient();
+        let normalized = regularized_solve(&j_aa, &u_a);
+
+        let mut next = self.clone();
+        match self.config.mode {
+            FilterMode::GaussianApproximation => next.gaussian_update(&f, &x_pred, &info)?,
+            FilterMode::ConstantGain => next.constant_gain_update(&x_pred, &info, &normalized)?,
+        }
+        let mut x = *next.ekf.state();
+        for idx in self.layout.parameter.iter().take(3).flatten() {
+            if let Some(v) = x.get_mut(*idx) {
+                *v = wrap(*v);
+            }
+        }
+        next.ekf
+            .set_state(x)
+            .map_err(|_| OneStageError::Numerical)?;
+        next.lock.update(
+            info.coherent_power,
+            info.aligned_power,
+            info.satellites,
+            &normalized,
+            &j_aa,
+        );
+        let (before, after) = (self.angles_of(&x_pred), self.angles_of(&x));
+        let report = EpochReport {
+            satellites: info.satellites,
+            status: next.lock.status(),
+            alignment: next.lock.alignment(),
+            settle_statistic: next.lock.settle_statistic(),
+            angle_discriminator: [info.gradient[0], info.gradient[1], info.gradient[2]],
+            angle_step: [0, 1, 2].map(|i| wrap(after[i] - before[i])),
+            curvature_floored: info.floored,
+        };
+        *self = next;
+        Ok(report)
+    }
+
+    /// The epoch's discriminators and information (zero for parameters not estimated) at the
+    /// state `x`.
+    fn information_at(
+        &self,
+        x: &SVector<T, N>,
+        observations: &[SatelliteObservation<T>],
+    ) -> Result<EpochInformation<T>, OneStageError> {
+        if observations.len() > MAX_SATELLITES {
+            return Err(OneStageError::TooManySatellites);
+        }
+        let mut checked = heapless::Vec::<CheckedObservation<T>, MAX_SATELLITES>::new();
+        for obs in observations {
+            let c = obs.check(self.config.epoch_s)?;
+            checked
+                .push(c)
+                .map_err(|_| OneStageError::TooManySatellites)?;
+        }
+        let [a, b, g] = self.angles_of(x);
+        let model = PhaseModel::new(
+            &self.array,
+            self.config.wavelength_m,
+            &Paper003Angles::new(a, b, g),
+        );
+        let mut info = epoch_information(
+            &model,
+            self.biases_of(x),
+            &checked,
+            self.config.curvature_floor,
+            self.config.mode == FilterMode::GaussianApproximation,
+        );
+        mask(&mut info, &self.layout.active());
+        Ok(info)
+    }
+
+    /// The discriminators and information of `observations` at the current estimate, without
+    /// changing the filter (diagnostics; [`Self::step`] evaluates them at the predicted state).
+    ///
+    /// # Errors
+    /// As [`Self::step`] for the observations.
+    pub fn information(
+        &self,
+        observations: &[SatelliteObservation<T>],
+    ) -> Result<EpochInformation<T>, OneStageError> {
+        self.information_at(self.ekf.state(), observations)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &OneStageConfig<T> {
+        &self.config
+    }
+
+    /// The antenna array.
+    pub fn array(&self) -> &AntennaArray<T> {
+        &self.array
+    }
+
+    /// Where each quantity sits in [`Self::estimate`]'s state vector.
+    pub fn layout(&self) -> &StateLayout {
+        &self.layout
+    }
+
+    /// The estimated angles α, β, γ of eq. (2), rad (held angles at their prior values).
+    pub fn angles(&self) -> Paper003Angles<T> {
+        let [a, b, g] = self.angles_of(self.ekf.state());
+        Paper003Angles::new(a, b, g)
+    }
+
+    /// The estimated attitude `C_rb = U(α)` (body to reference).
+    pub fn attitude(&self) -> Matrix3<T> {
+        self.angles().to_dcm()
+    }
+
+    /// The estimated rates (α̇, β̇, γ̇), rad/s (zero for held angles).
+    pub fn rates(&self) -> Vector3<T> {
+        let x = self.ekf.state();
+        Vector3::from(
+            self.layout
+                .rate
+                .map(|r| r.and_then(|i| x.get(i).copied()).unwrap_or_else(T::zero)),
+        )
+    }
+
+    /// The estimated line biases `b_B`, `b_C`, rad (zero when not estimated).
+    pub fn line_bias(&self) -> [T; 2] {
+        self.biases_of(self.ekf.state())
+    }
+
+    /// The covariance of the angles (rad², zero rows for held angles) in the
+    /// Gaussian-approximation mode; `None` for the constant-gain loop, which has none.
+    pub fn angle_covariance(&self) -> Option<Matrix3<T>> {
+        if self.config.mode != FilterMode::GaussianApproximation {
+            return None;
+        }
+        let p = self.ekf.covariance();
+        let idx = self.layout.parameter;
+        Some(Matrix3::from_fn(|i, j| {
+            match (idx.get(i).copied().flatten(), idx.get(j).copied().flatten()) {
+                (Some(a), Some(b)) => el(p, a, b),
+                _ => T::zero(),
+            }
+        }))
+    }
+
+    /// The state (ordered as [`Self::layout`]) and, in the Gaussian mode, its covariance.
+    pub fn estimate(&self) -> &Ekf<N, T> {
+        &self.ekf
+    }
+
+    /// The lock detector's verdict.
+    pub fn lock_status(&self) -> LockStatus {
+        self.lock.status()
+    }
+}
+
+/// Zeroes the information of parameters that are not estimated.
+fn mask<T: Real>(info: &mut EpochInformation<T>, active: &[bool; PARAMETERS]) {
+    for (k, &on) in active.iter().enumerate() {
+        if !on {
+            info.gradient[k] = T::zero();
+            info.observed.row_mut(k).fill(T::zero());
+            info.observed.column_mut(k).fill(T::zero());
+            info.expected.row_mut(k).fill(T::zero());
+            info.expected.column_mut(k).fill(T::zero());
+        }
+    }
+}
