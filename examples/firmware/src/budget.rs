@@ -62,7 +62,16 @@ fn stack_used_below(sp: usize) -> usize {
     }
 }
 
-/// Runs `f` once between the instruction-count markers and reports its stack use.
+/// Calls `f` in a frame of its own, below the caller's stack pointer, so that everything `f`
+/// (and whatever the optimizer inlines into it) puts on the stack is below the measuring
+/// point.
+#[inline(never)]
+fn call<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
+/// Runs `f` once between the instruction-count markers and reports its stack use (including
+/// the few bytes of the `call` trampoline frame).
 #[inline(never)]
 pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
     let n = REGION.fetch_add(1, Ordering::Relaxed);
@@ -70,7 +79,7 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
     let sp = cortex_m::register::msp::read() as usize;
     // SAFETY: the markers are register-to-self moves with no effect on program state.
     unsafe { core::arch::asm!("mov r8, r8") };
-    let out = black_box(f());
+    let out = black_box(call(f));
     unsafe { core::arch::asm!("mov r9, r9") };
     let used = stack_used_below(sp);
     hprintln!("budget region {}: {}, stack {} B", n, name, used);
