@@ -133,3 +133,76 @@ impl fmt::Display for GeometryError {
 }
 
 impl core::error::Error for GeometryError {}
+
+/// Errors of sample decoding ([`crate::signal::samples`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SampleError {
+    /// The format's parameters are out of range (a CS16 shift above 8, a multi-channel format
+    /// with 0 or more than 4 channels).
+    InvalidFormat,
+    /// The requested channel is not in the stream (channel ≥ the format's channel count).
+    NoSuchChannel,
+    /// The byte slice ends inside a sample (odd CS8 length, CS16 length not a multiple of 4).
+    PartialSample,
+}
+
+impl Error for SampleError {
+    fn kind(&self) -> ErrorKind {
+        ErrorKind::InvalidInput
+    }
+}
+
+impl fmt::Display for SampleError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::InvalidFormat => "sample format parameters out of range",
+            Self::NoSuchChannel => "channel not present in the sample stream",
+            Self::PartialSample => "byte stream ends inside a sample",
+        })
+    }
+}
+
+impl core::error::Error for SampleError {}
+
+/// Errors of the correlators and NCOs ([`crate::signal`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SignalError {
+    /// A frequency, rate or phase was NaN or infinite.
+    NonFinite,
+    /// A configuration value is out of range: sample rate outside 1.023–64 MHz, IF beyond the
+    /// sample rate, early/late offset outside (0, 1] chip, a carrier frequency beyond ±f_s/2,
+    /// a code rate more than 1 % off nominal, or no antennas.
+    InvalidConfig,
+    /// The antennas' sample slices of a block differ in length.
+    BlockLengthMismatch,
+    /// The cursor passed to the correlator lies beyond the end of the block.
+    CursorOutOfRange,
+}
+
+impl Error for SignalError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::InvalidConfig | Self::BlockLengthMismatch | Self::CursorOutOfRange => {
+                ErrorKind::InvalidInput
+            }
+        }
+    }
+}
+
+impl fmt::Display for SignalError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::NonFinite => "non-finite NCO input",
+            Self::InvalidConfig => "correlator configuration out of range",
+            Self::BlockLengthMismatch => "antenna sample slices differ in length",
+            Self::CursorOutOfRange => "cursor beyond the end of the sample block",
+        })
+    }
+}
+
+impl core::error::Error for SignalError {}

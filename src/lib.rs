@@ -36,6 +36,7 @@
 //! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
+//! | [`signal`] | GPS L1 C/A codes, front-end sample formats, NCOs, the fixed-point three-antenna correlator |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
 //!
@@ -73,11 +74,12 @@ pub mod error;
 pub mod geometry;
 pub mod noise;
 pub mod selftest;
+pub mod signal;
 
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{ErrorKind, FilterError, GeometryError};
+pub use error::{ErrorKind, FilterError, GeometryError, SampleError, SignalError};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.
