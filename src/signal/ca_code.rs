@@ -106,6 +106,28 @@ const fn generate_all() -> [[u32; CODE_WORDS]; PRN_COUNT] {
 /// All 32 C/A codes as packed logic bits, index `prn − 1`; computed at compile time.
 pub static CA_CODE_BITS: [[u32; CODE_WORDS]; PRN_COUNT] = generate_all();
 
+const fn signs_all() -> [[i8; 1024]; PRN_COUNT] {
+    let mut all = [[0i8; 1024]; PRN_COUNT];
+    let mut p = 0;
+    while p < PRN_COUNT {
+        let bits = generate_code_bits(p as u8 + 1);
+        let mut k = 0;
+        while k < CA_CODE_LENGTH {
+            all[p][k] = 1 - 2 * ((bits[k / 32] >> (k % 32)) & 1) as i8;
+            k += 1;
+        }
+        // Entry 1023 repeats chip 0 (never read by a correct index; keeps `& 1023` safe).
+        all[p][CA_CODE_LENGTH] = all[p][0];
+        p += 1;
+    }
+    all
+}
+
+/// All 32 C/A codes as signal values (`±1`, one `i8` per chip, 1024 entries per PRN so that
+/// an index masked with `& 1023` is always in bounds), index `prn − 1`; computed at compile
+/// time (32 KiB of read-only data). The correlator's replica generator reads it.
+pub static CA_CODE_SIGNS: [[i8; 1024]; PRN_COUNT] = signs_all();
+
 /// A PRN number validated to be in 1–32.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -134,6 +156,11 @@ impl Prn {
     /// The packed code bits of this PRN.
     pub fn code_bits(self) -> &'static [u32; CODE_WORDS] {
         &CA_CODE_BITS[self.index()]
+    }
+
+    /// The ±1 chip table of this PRN (see [`CA_CODE_SIGNS`]).
+    pub fn code_signs(self) -> &'static [i8; 1024] {
+        &CA_CODE_SIGNS[self.index()]
     }
 
     /// Logic value (0 or 1) of chip `k` (taken modulo 1024, so `k` must be below 1023 for a

@@ -483,17 +483,29 @@ fn fill_carrier(cos: &mut [i16], sin: &mut [i16], mut phase: u32, step: u32) -> 
 }
 
 /// Fills `out` with the ±1 code of `prn` from code phase `phase` (2⁻³² chip, `< CODE_WRAP`).
+/// The fill is split at the code-period wrap (at most a few per chunk), so the per-sample
+/// work is an add, a shift and a table load.
 #[inline]
-fn fill_code(out: &mut [i16], prn: Prn, mut phase: u64, step: u64) {
-    let words = prn.code_bits();
-    for r in out.iter_mut() {
-        let k = (phase >> 32) as usize;
-        let bit = (words[(k >> 5) & 31] >> (k & 31)) & 1;
-        *r = 1 - 2 * bit as i16;
-        phase += step;
-        if phase >= CODE_WRAP {
-            phase -= CODE_WRAP;
+fn fill_code(out: &mut [i16], prn: Prn, phase: u64, step: u64) {
+    let table = prn.code_signs();
+    let mut phase = phase % CODE_WRAP;
+    let mut rest = out;
+    // Bounded: each pass fills up to the next wrap, which is at least one sample away when the
+    // step is positive; a zero step fills everything in one pass.
+    while !rest.is_empty() {
+        let to_wrap = if step == 0 {
+            rest.len()
+        } else {
+            ((CODE_WRAP - phase).div_ceil(step) as usize).clamp(1, rest.len())
+        };
+        let (head, tail) = core::mem::take(&mut rest).split_at_mut(to_wrap);
+        let mut ph = phase;
+        for r in head.iter_mut() {
+            *r = i16::from(table[(ph >> 32) as usize & 1023]);
+            ph += step;
         }
+        phase = ph.checked_sub(CODE_WRAP).unwrap_or(ph) % CODE_WRAP;
+        rest = tail;
     }
 }
 
@@ -542,7 +554,7 @@ fn correlate_real(xi: &[i8], r: &Replica<'_>) -> [i32; 8] {
         .zip(r.noise);
     for ((((((&i, &c), &s), &e), &p), &l), &z) in it {
         let i = i16::from(i);
-        let (mi, mq) = (i32::from(i * c), -i32::from(i * s));
+        let (mi, mq) = (i32::from(i * c), i32::from(-i * s));
         a[0] += mi * i32::from(e);
         a[1] += mq * i32::from(e);
         a[2] += mi * i32::from(p);
