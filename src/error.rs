@@ -206,3 +206,43 @@ impl fmt::Display for SignalError {
 }
 
 impl core::error::Error for SignalError {}
+
+/// Errors of acquisition ([`crate::tracking::acquisition`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AcquisitionError {
+    /// A configuration value was NaN or infinite.
+    NonFinite,
+    /// The configuration is out of range (sample rate outside 1.023–64 MHz, IF beyond the
+    /// sample rate, Doppler step below 10 Hz, more Doppler bins than the engine holds, zero or
+    /// too many milliseconds, a false-alarm probability outside (0, 0.5)), or the engine's
+    /// FFT size is not a power of two in 1024–8192.
+    InvalidConfig,
+    /// Fewer samples than the configured number of milliseconds needs.
+    NotEnoughSamples,
+    /// The quadrature samples are fewer than the in-phase samples.
+    LengthMismatch,
+}
+
+impl Error for AcquisitionError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            _ => ErrorKind::InvalidInput,
+        }
+    }
+}
+
+impl fmt::Display for AcquisitionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::NonFinite => "non-finite acquisition configuration",
+            Self::InvalidConfig => "acquisition configuration out of range",
+            Self::NotEnoughSamples => "fewer samples than the search needs",
+            Self::LengthMismatch => "quadrature samples shorter than in-phase samples",
+        })
+    }
+}
+
+impl core::error::Error for AcquisitionError {}

@@ -37,6 +37,7 @@
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`signal`] | GPS L1 C/A codes, front-end sample formats, NCOs, the fixed-point three-antenna correlator |
+//! | [`tracking`] | Acquisition, tracking loops, C/N0, lock detectors, the per-satellite channel |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
 //!
@@ -75,11 +76,12 @@ pub mod geometry;
 pub mod noise;
 pub mod selftest;
 pub mod signal;
+pub mod tracking;
 
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{ErrorKind, FilterError, GeometryError, SampleError, SignalError};
+pub use error::{ErrorKind, FilterError, GeometryError, SampleError, SignalError, AcquisitionError};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

@@ -9,8 +9,10 @@
 //! * [`truth`]: the f64 truth models (attitude kinematics, ...).
 //! * [`report`]: JSON summary, CSV time series, PNG plots, progress bars.
 //! * [`stats`]: small statistics helpers (RMS, percentiles, χ² intervals).
+//! * [`synth`]: the coherent three-antenna GPS L1 C/A sample synthesizer.
 
 pub mod report;
 pub mod scenarios;
 pub mod stats;
+pub mod synth;
 pub mod truth;
