@@ -246,3 +246,50 @@ impl fmt::Display for AcquisitionError {
 }
 
 impl core::error::Error for AcquisitionError {}
+
+/// Errors of the tracking channel ([`crate::tracking::channel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum TrackingError {
+    /// A loop parameter or a hand-over value was NaN or infinite.
+    NonFinite,
+    /// A loop parameter is out of range (a bandwidth outside 0–100 Hz, an empty window).
+    InvalidConfig,
+    /// The channel was asked to process samples before an acquisition was handed over.
+    NotStarted,
+    /// The acquisition handed over is for another PRN.
+    WrongPrn,
+    /// The correlator refused a configuration, NCO setting or block.
+    Signal(SignalError),
+}
+
+impl From<SignalError> for TrackingError {
+    fn from(e: SignalError) -> Self {
+        Self::Signal(e)
+    }
+}
+
+impl Error for TrackingError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::InvalidConfig | Self::NotStarted | Self::WrongPrn => ErrorKind::InvalidInput,
+            Self::Signal(e) => e.kind(),
+        }
+    }
+}
+
+impl fmt::Display for TrackingError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NonFinite => f.write_str("non-finite tracking input"),
+            Self::InvalidConfig => f.write_str("tracking configuration out of range"),
+            Self::NotStarted => f.write_str("channel not started"),
+            Self::WrongPrn => f.write_str("acquisition result is for another PRN"),
+            Self::Signal(e) => write!(f, "correlator: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for TrackingError {}

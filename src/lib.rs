@@ -81,7 +81,7 @@ pub mod tracking;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{ErrorKind, FilterError, GeometryError, SampleError, SignalError, AcquisitionError};
+pub use error::{ErrorKind, FilterError, GeometryError, SampleError, SignalError, AcquisitionError, TrackingError};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

@@ -534,3 +534,65 @@ fn acquisition_finds_visible_prns_and_no_false_ones() {
     }
     let _ = CS16_SHIFT;
 }
+
+use gnss_attitude::tracking::ChannelConfig;
+use host_sim::chain::{run, ChainParams};
+
+fn wrap_cycles(x: f64) -> f64 {
+    x - x.round()
+}
+
+#[test]
+fn tracking_holds_lock_and_recovers_phase_differences() {
+    for (cn0, seed) in [(35.0, 11u64), (45.0, 12)] {
+        let visible = [6u8, 13, 22];
+        let mut sc = scene(cn0, &visible, seed, 2.6e6, true);
+        sc.attitude = AttitudeMotion::ConstantRate { c_rb0: Matrix3::identity(), omega_b: Vector3::new(0.0, 0.05, 0.0) };
+        let params = ChainParams {
+            scene: sc.clone(),
+            format: SampleFormat::Cs8,
+            acquisition: AcquisitionConfig {
+                sample_rate_hz: 2.6e6,
+                intermediate_frequency_hz: 0.0,
+                doppler_max_hz: 5000.0,
+                doppler_step_hz: 500.0,
+                noncoherent_ms: 40,
+                false_alarm_probability: 1e-3,
+            },
+            search_prns: visible.to_vec(),
+            channel: ChannelConfig::new(2.6e6, 0.0),
+            duration_s: 3.0,
+            block: 26_000,
+        };
+        let out = run(&params, None).unwrap();
+        assert_eq!(out.tracked.len(), 3);
+        for t in &out.tracked {
+            let last = t.epochs.last().unwrap();
+            let locked_from = t.epochs.iter().position(|e| e.locked).unwrap();
+            let after = &t.epochs[locked_from..];
+            let mut err2 = 0.0;
+            for e in after.iter().filter(|e| e.t > 1.0) {
+                let (a, b) = (e.prompt[0], e.prompt[1]);
+                let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / std::f64::consts::TAU;
+                let truth = sc.truth(t.scene_index, 1, e.t).carrier_phase_cycles - sc.truth(t.scene_index, 0, e.t).carrier_phase_cycles;
+                err2 += wrap_cycles(measured - truth).powi(2);
+            }
+            let n = after.iter().filter(|e| e.t > 1.0).count() as f64;
+            let rms = (err2 / n).sqrt();
+            let bound = 1.0 / (std::f64::consts::TAU * (10f64.powf(cn0 / 10.0) * 1e-3).sqrt());
+            eprintln!(
+                "{cn0} dB-Hz PRN {}: locked at {:.2} s, all locked after: {}, C/N0 {:.1}, Doppler err {:.2} Hz, phase diff rms {rms:.4} cycles (high-SNR bound {bound:.4})",
+                t.acquisition.prn.number(),
+                t.epochs[locked_from].t,
+                after.iter().all(|e| e.locked),
+                last.cn0_dbhz,
+                last.doppler_hz - sc.truth(t.scene_index, 0, last.t).doppler_hz,
+            );
+            let changes: Vec<(f64, bool)> = t.epochs.windows(2).filter(|w| w[0].locked != w[1].locked).map(|w| (w[1].t, w[1].locked)).collect();
+            eprintln!("  lock changes {changes:?}");
+            assert!(after.iter().all(|e| e.locked));
+            assert!((last.cn0_dbhz - cn0).abs() < 1.5);
+            assert!(rms < 1.3 * bound, "{rms} vs {bound}");
+        }
+    }
+}

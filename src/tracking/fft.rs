@@ -27,8 +27,13 @@ impl<const N: usize> Fft<N> {
     }
 
     /// In-place forward transform `X[k] = Σ x[n] e^{−j2πkn/N}`; `inverse` uses `e^{+j…}`
-    /// (unscaled).
+    /// (unscaled), computed as `conj(FFT(conj(x)))`.
     pub fn transform(&self, x: &mut [Complex; N], inverse: bool) {
+        if inverse {
+            for v in x.iter_mut() {
+                v[1] = -v[1];
+            }
+        }
         // Bit-reversal permutation.
         let bits = N.trailing_zeros();
         for i in 0..N {
@@ -41,24 +46,25 @@ impl<const N: usize> Fft<N> {
         while len <= N {
             let half = len / 2;
             let stride = N / len;
-            let mut start = 0;
-            while start < N {
-                for k in 0..half {
-                    let w = self.twiddles[(k * stride) & (N - 1)];
-                    let w = if inverse { [w[0], -w[1]] } else { w };
-                    let (a, b) = (start + k, start + k + half);
-                    if b >= N {
-                        continue;
-                    }
-                    let u = x[a];
-                    let v = x[b];
+            for block in x.chunks_exact_mut(len) {
+                let (lo, hi) = block.split_at_mut(half);
+                for ((u, v), w) in lo
+                    .iter_mut()
+                    .zip(hi.iter_mut())
+                    .zip(self.twiddles.iter().step_by(stride))
+                {
                     let t = [v[0] * w[0] - v[1] * w[1], v[0] * w[1] + v[1] * w[0]];
-                    x[a] = [u[0] + t[0], u[1] + t[1]];
-                    x[b] = [u[0] - t[0], u[1] - t[1]];
+                    let a = *u;
+                    *u = [a[0] + t[0], a[1] + t[1]];
+                    *v = [a[0] - t[0], a[1] - t[1]];
                 }
-                start += len;
             }
             len *= 2;
+        }
+        if inverse {
+            for v in x.iter_mut() {
+                v[1] = -v[1];
+            }
         }
     }
 }
