@@ -12,10 +12,11 @@ use std::path::PathBuf;
 use anyhow::{anyhow, bail};
 use serde_json::{json, Map, Value};
 
+pub mod signal;
 pub mod vector_ekf;
 
 /// Every scenario host-sim can run, in the order `host-sim list` shows them.
-pub const SCENARIOS: &[Scenario] = &[vector_ekf::SCENARIO];
+pub const SCENARIOS: &[Scenario] = &[vector_ekf::SCENARIO, signal::SCENARIO];
 
 /// What `host-sim` runs when called without arguments.
 pub const DEFAULT_SCENARIO: &str = "vector-ekf";
