@@ -293,3 +293,40 @@ impl fmt::Display for TrackingError {
 }
 
 impl core::error::Error for TrackingError {}
+
+/// Errors of the front-end drivers ([`crate::frontend`]); `E` is the SPI bus error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum FrontEndError<E> {
+    /// The SPI transfer failed.
+    Spi(E),
+    /// A configuration value is out of range (PLL dividers, clock divider, register address).
+    InvalidConfig,
+    /// The chip ID read back is not the expected part's; nothing was written.
+    WrongChip,
+    /// The part did not report ready (PLL lock, AOK) within the polling bound.
+    NotReady,
+}
+
+impl<E: fmt::Debug> Error for FrontEndError<E> {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::InvalidConfig | Self::WrongChip => ErrorKind::InvalidInput,
+            Self::Spi(_) | Self::NotReady => ErrorKind::NotConverged,
+        }
+    }
+}
+
+impl<E: fmt::Debug> fmt::Display for FrontEndError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Spi(e) => write!(f, "SPI error: {e:?}"),
+            Self::InvalidConfig => f.write_str("front-end configuration out of range"),
+            Self::WrongChip => f.write_str("unexpected chip ID"),
+            Self::NotReady => f.write_str("front end not ready within the polling bound"),
+        }
+    }
+}
+
+impl<E: fmt::Debug> core::error::Error for FrontEndError<E> {}

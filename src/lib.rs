@@ -38,6 +38,7 @@
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`signal`] | GPS L1 C/A codes, front-end sample formats, NCOs, the fixed-point three-antenna correlator |
 //! | [`tracking`] | Acquisition, tracking loops, C/N0, lock detectors, the per-satellite channel |
+//! | [`frontend`] | SPI driver of the NT1065 four-channel front end (embedded-hal 1.0) |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
 //!
@@ -72,6 +73,7 @@ mod log;
 
 pub mod ekf;
 pub mod error;
+pub mod frontend;
 pub mod geometry;
 pub mod noise;
 pub mod selftest;
@@ -81,7 +83,10 @@ pub mod tracking;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{ErrorKind, FilterError, GeometryError, SampleError, SignalError, AcquisitionError, TrackingError};
+pub use error::{
+    AcquisitionError, ErrorKind, FilterError, FrontEndError, GeometryError, SampleError,
+    SignalError, TrackingError,
+};
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.

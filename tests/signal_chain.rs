@@ -519,16 +519,24 @@ fn acquisition_finds_visible_prns_and_no_false_ones() {
         let planar = decode(format, &encode(format, &analog).unwrap(), 3, n).unwrap();
         let mut acq = Box::new(Acquisition::<2048>::new().unwrap());
         for p in [3u8, 11, 19, 27, 1, 8, 15, 30] {
-            let r = acq.search(prn(p), &planar.i[0], Some(&planar.q[0]), 0, &cfg).unwrap();
+            let r = acq
+                .search(prn(p), &planar.i[0], Some(&planar.q[0]), 0, &cfg)
+                .unwrap();
             if let Some(k) = visible.iter().position(|&v| v == p) {
                 let truth = sc.truth(k, 0, 0.0);
-                let code_err = (f64::from(r.code_phase_chips) - truth.code_phase_chips + 511.5).rem_euclid(1023.0) - 511.5;
+                let code_err = (f64::from(r.code_phase_chips) - truth.code_phase_chips + 511.5)
+                    .rem_euclid(1023.0)
+                    - 511.5;
                 let dopp_err = f64::from(r.doppler_hz) - truth.doppler_hz;
                 eprintln!("{cn0} dB-Hz PRN {p}: metric {:.2} (threshold {:.2}), Doppler error {dopp_err:.0} Hz, code error {code_err:.3} chip", r.metric, r.threshold);
                 assert!(r.detected, "{cn0} dB-Hz: PRN {p} missed");
                 assert!(dopp_err.abs() <= 250.0 && code_err.abs() <= 0.5);
             } else {
-                assert!(!r.detected, "{cn0} dB-Hz: false PRN {p} (metric {} > {})", r.metric, r.threshold);
+                assert!(
+                    !r.detected,
+                    "{cn0} dB-Hz: false PRN {p} (metric {} > {})",
+                    r.metric, r.threshold
+                );
             }
         }
     }
@@ -547,7 +555,10 @@ fn tracking_holds_lock_and_recovers_phase_differences() {
     for (cn0, seed) in [(35.0, 11u64), (45.0, 12)] {
         let visible = [6u8, 13, 22];
         let mut sc = scene(cn0, &visible, seed, 2.6e6, true);
-        sc.attitude = AttitudeMotion::ConstantRate { c_rb0: Matrix3::identity(), omega_b: Vector3::new(0.0, 0.05, 0.0) };
+        sc.attitude = AttitudeMotion::ConstantRate {
+            c_rb0: Matrix3::identity(),
+            omega_b: Vector3::new(0.0, 0.05, 0.0),
+        };
         let params = ChainParams {
             scene: sc.clone(),
             format: SampleFormat::Cs8,
@@ -573,8 +584,10 @@ fn tracking_holds_lock_and_recovers_phase_differences() {
             let mut err2 = 0.0;
             for e in after.iter().filter(|e| e.t > 1.0) {
                 let (a, b) = (e.prompt[0], e.prompt[1]);
-                let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / std::f64::consts::TAU;
-                let truth = sc.truth(t.scene_index, 1, e.t).carrier_phase_cycles - sc.truth(t.scene_index, 0, e.t).carrier_phase_cycles;
+                let measured =
+                    (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / std::f64::consts::TAU;
+                let truth = sc.truth(t.scene_index, 1, e.t).carrier_phase_cycles
+                    - sc.truth(t.scene_index, 0, e.t).carrier_phase_cycles;
                 err2 += wrap_cycles(measured - truth).powi(2);
             }
             let n = after.iter().filter(|e| e.t > 1.0).count() as f64;
@@ -588,7 +601,12 @@ fn tracking_holds_lock_and_recovers_phase_differences() {
                 last.cn0_dbhz,
                 last.doppler_hz - sc.truth(t.scene_index, 0, last.t).doppler_hz,
             );
-            let changes: Vec<(f64, bool)> = t.epochs.windows(2).filter(|w| w[0].locked != w[1].locked).map(|w| (w[1].t, w[1].locked)).collect();
+            let changes: Vec<(f64, bool)> = t
+                .epochs
+                .windows(2)
+                .filter(|w| w[0].locked != w[1].locked)
+                .map(|w| (w[1].t, w[1].locked))
+                .collect();
             eprintln!("  lock changes {changes:?}");
             assert!(after.iter().all(|e| e.locked));
             assert!((last.cn0_dbhz - cn0).abs() < 1.5);

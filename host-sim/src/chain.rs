@@ -112,11 +112,23 @@ pub fn run(params: &ChainParams, progress: Option<&indicatif::ProgressBar>) -> R
     let mut false_detections = Vec::new();
     let mut channels = Vec::new();
     for s in searches.iter().filter(|s| s.detected) {
-        match params.scene.satellites.iter().position(|sat| sat.prn == s.prn.number()) {
+        match params
+            .scene
+            .satellites
+            .iter()
+            .position(|sat| sat.prn == s.prn.number())
+        {
             Some(k) => {
                 let mut ch = Channel::<ANTENNAS>::new(s.prn, &params.channel)?;
                 ch.start(s)?;
-                channels.push((ch, TrackedSatellite { scene_index: k, acquisition: *s, epochs: Vec::new() }));
+                channels.push((
+                    ch,
+                    TrackedSatellite {
+                        scene_index: k,
+                        acquisition: *s,
+                        epochs: Vec::new(),
+                    },
+                ));
             }
             None => false_detections.push(s.prn.number()),
         }

@@ -201,7 +201,8 @@ impl<const N: usize> Acquisition<N> {
                 }
                 self.fft.transform(&mut self.data, true);
                 // Code Doppler: ms m's lag is shifted by −m·N·f/f_L1 bins.
-                let drift = libm::round(m as f64 * N as f64 * f64::from(doppler) / GPS_L1_HZ) as i64;
+                let drift =
+                    libm::round(m as f64 * N as f64 * f64::from(doppler) / GPS_L1_HZ) as i64;
                 let shift = drift.rem_euclid(N as i64) as usize;
                 for (l, p) in self.power.iter_mut().enumerate() {
                     let d = self.data[(l + N - shift) & (N - 1)];
@@ -236,7 +237,11 @@ impl<const N: usize> Acquisition<N> {
             libm::sqrtf(best_neighbours[1]),
         );
         let denom = 2.0 * (a0 - am.min(ap));
-        let delta = if denom > 0.0 { ((ap - am) / denom).clamp(-0.5, 0.5) } else { 0.0 };
+        let delta = if denom > 0.0 {
+            ((ap - am) / denom).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
         let lag = best.2 as f32 + delta;
         let mut code_phase = (N as f32 - lag) * (CA_CODE_LENGTH as f32 / N as f32);
         code_phase = libm::fmodf(code_phase, CA_CODE_LENGTH as f32);
@@ -252,7 +257,11 @@ impl<const N: usize> Acquisition<N> {
             if bd + 1 < bins { amp(bd + 1) } else { 0.0 },
         );
         let curv = 2.0 * f0 - fm - fp;
-        let df = if curv > 0.0 { (0.5 * (fp - fm) / curv).clamp(-0.5, 0.5) } else { 0.0 };
+        let df = if curv > 0.0 {
+            (0.5 * (fp - fm) / curv).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
         let doppler = ((bd as i32 - half) as f32 + df) * config.doppler_step_hz;
         Ok(SearchResult {
             prn,
@@ -281,7 +290,14 @@ impl<const N: usize> Acquisition<N> {
 
     /// Mixes millisecond `m` of the samples with the Doppler bin's carrier and integrates it
     /// into the `N` bins of `self.data`.
-    fn decimate(&mut self, i: &[i8], q: Option<&[i8]>, m: usize, doppler: f32, config: &AcquisitionConfig) {
+    fn decimate(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        m: usize,
+        doppler: f32,
+        config: &AcquisitionConfig,
+    ) {
         self.data = [[0.0; 2]; N];
         let fs = config.sample_rate_hz;
         let start = libm::ceil(m as f64 * fs * 1e-3) as usize;

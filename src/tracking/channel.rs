@@ -301,7 +301,8 @@ impl<const A: usize> Channel<A> {
         let doppler = f64::from(acq.doppler_hz);
         let dt = (now as i64).wrapping_sub(acq.first_sample as i64) as f64 / fs;
         let rate = CA_CHIP_RATE_HZ * (1.0 + doppler / GPS_L1_HZ);
-        self.correlator.set_code_phase(f64::from(acq.code_phase_chips) + dt * rate)?;
+        self.correlator
+            .set_code_phase(f64::from(acq.code_phase_chips) + dt * rate)?;
         self.correlator.set_code_rate(rate)?;
         self.correlator
             .set_carrier_frequency(self.config.intermediate_frequency_hz + doppler)?;
@@ -330,13 +331,23 @@ impl<const A: usize> Channel<A> {
         let pulling = refining || since < cfg.pull_in_ms;
         // Discriminators.
         let phase_err = costas_cycles(&p);
-        let freq_err = self.previous_prompt.map_or(0.0, |prev| fll_hz(&prev, &p, t));
+        let freq_err = self
+            .previous_prompt
+            .map_or(0.0, |prev| fll_hz(&prev, &p, t));
         let offset = self.correlator.early_late_offset_samples() as f32
             * (CA_CHIP_RATE_HZ / cfg.sample_rate_hz) as f32;
         let code_err = dll_chips(&reference.early, &reference.late, offset);
         // Loop filters → NCOs for the next period.
-        let fll_bw = if pulling { cfg.fll_pull_in_bandwidth_hz } else { cfg.fll_bandwidth_hz };
-        let dll_bw = if pulling { cfg.dll_pull_in_bandwidth_hz } else { cfg.dll_bandwidth_hz };
+        let fll_bw = if pulling {
+            cfg.fll_pull_in_bandwidth_hz
+        } else {
+            cfg.fll_bandwidth_hz
+        };
+        let dll_bw = if pulling {
+            cfg.dll_pull_in_bandwidth_hz
+        } else {
+            cfg.dll_bandwidth_hz
+        };
         let doppler = if refining {
             // Carrier loop open: keep the acquired Doppler, store the prompt's square.
             let (i, q) = (p.i as f32 / 65_536.0, p.q as f32 / 65_536.0);
@@ -352,7 +363,8 @@ impl<const A: usize> Channel<A> {
                 self.acquired_doppler
             }
         } else {
-            self.carrier.update(phase_err, freq_err, t, cfg.pll_bandwidth_hz, fll_bw)
+            self.carrier
+                .update(phase_err, freq_err, t, cfg.pll_bandwidth_hz, fll_bw)
         };
         let code_rate = CA_CHIP_RATE_HZ * (1.0 + f64::from(doppler) / GPS_L1_HZ)
             + f64::from(dll_correction(code_err, dll_bw));
@@ -384,7 +396,9 @@ impl<const A: usize> Channel<A> {
             self.state = ChannelState::Lost;
         } else {
             self.state = match self.state {
-                ChannelState::PullIn if !pulling && self.lock.phase_lock() => ChannelState::Tracking,
+                ChannelState::PullIn if !pulling && self.lock.phase_lock() => {
+                    ChannelState::Tracking
+                }
                 ChannelState::Tracking if !self.lock.code_lock() => ChannelState::Lost,
                 s => s,
             };
@@ -428,7 +442,10 @@ impl<const A: usize> Channel<A> {
     /// The replica's current Doppler (carrier NCO frequency minus IF), Hz.
     #[allow(clippy::misnamed_getters)]
     pub fn carrier_frequency_hz(&self) -> f32 {
-        (self.correlator.carrier().frequency_hz(self.config.sample_rate_hz)
+        (self
+            .correlator
+            .carrier()
+            .frequency_hz(self.config.sample_rate_hz)
             - self.config.intermediate_frequency_hz) as f32
     }
 }

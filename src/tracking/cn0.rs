@@ -60,11 +60,23 @@ impl PowerWindow {
         *self = Self::default();
         let signal = pi + pq - pn;
         let ratio = if pn > 0.0 { signal / (pn * t) } else { 0.0 };
-        let cn0 = if ratio > 1.0 { 10.0 * libm::log10f(ratio) } else { 0.0 };
-        let pld = if signal > 0.0 { (pi - pq) / signal } else { 0.0 };
+        let cn0 = if ratio > 1.0 {
+            10.0 * libm::log10f(ratio)
+        } else {
+            0.0
+        };
+        let pld = if signal > 0.0 {
+            (pi - pq) / signal
+        } else {
+            0.0
+        };
         Some(WindowEstimate {
             cn0_dbhz: cn0.clamp(0.0, 99.0),
-            phase_lock_indicator: if pld.is_finite() { pld.clamp(-1.0, 1.0) } else { 0.0 },
+            phase_lock_indicator: if pld.is_finite() {
+                pld.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            },
         })
     }
 }

@@ -46,13 +46,27 @@ impl LockDetector {
     pub fn update(&mut self, cn0_dbhz: f32, pld: f32) {
         let code_ok = cn0_dbhz >= self.cn0_threshold_dbhz;
         let phase_ok = code_ok && pld >= self.pld_threshold;
-        step(&mut self.code_lock, &mut self.bad_code, code_ok, self.windows_to_lose);
-        step(&mut self.phase_lock, &mut self.bad_phase, phase_ok, self.windows_to_lose);
+        step(
+            &mut self.code_lock,
+            &mut self.bad_code,
+            code_ok,
+            self.windows_to_lose,
+        );
+        step(
+            &mut self.phase_lock,
+            &mut self.bad_phase,
+            phase_ok,
+            self.windows_to_lose,
+        );
     }
 
     /// Declares both locks lost.
     pub fn reset(&mut self) {
-        *self = Self::new(self.cn0_threshold_dbhz, self.pld_threshold, self.windows_to_lose);
+        *self = Self::new(
+            self.cn0_threshold_dbhz,
+            self.pld_threshold,
+            self.windows_to_lose,
+        );
     }
 }
 

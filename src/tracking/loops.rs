@@ -26,7 +26,12 @@ pub fn costas_cycles(p: &Iq) -> f32 {
 /// Cross/dot FLL discriminator on two consecutive prompts `T` seconds apart: frequency
 /// error in Hz, `atan(cross/dot)/(2πT)` (bit-tolerant, range ±1/(4T)).
 pub fn fll_hz(previous: &Iq, current: &Iq, t: f32) -> f32 {
-    let (i1, q1, i2, q2) = (previous.i as f32, previous.q as f32, current.i as f32, current.q as f32);
+    let (i1, q1, i2, q2) = (
+        previous.i as f32,
+        previous.q as f32,
+        current.i as f32,
+        current.q as f32,
+    );
     let cross = i1 * q2 - q1 * i2;
     let dot = i1 * i2 + q1 * q2;
     if dot == 0.0 || !(t > 0.0) {
@@ -84,12 +89,21 @@ impl CarrierLoop {
     /// f'  = f + T ((r + r')/2 + a₃ ω_p² e_φ + a₂ ω_f e_f)
     /// out = (f + f')/2 + b₃ ω_p e_φ
     /// ```
-    pub fn update(&mut self, phase_cycles: f32, freq_hz: f32, t: f32, pll_bw: f32, fll_bw: f32) -> f32 {
+    pub fn update(
+        &mut self,
+        phase_cycles: f32,
+        freq_hz: f32,
+        t: f32,
+        pll_bw: f32,
+        fll_bw: f32,
+    ) -> f32 {
         let wp = pll_bw / 0.7845;
         let wf = fll_bw / 0.53;
         let rate = self.rate + t * (wp * wp * wp * phase_cycles + wf * wf * freq_hz);
         let frequency = self.frequency
-            + t * (0.5 * (self.rate + rate) + 1.1 * wp * wp * phase_cycles + core::f32::consts::SQRT_2 * wf * freq_hz);
+            + t * (0.5 * (self.rate + rate)
+                + 1.1 * wp * wp * phase_cycles
+                + core::f32::consts::SQRT_2 * wf * freq_hz);
         let out = 0.5 * (self.frequency + frequency) + 2.4 * wp * phase_cycles;
         if rate.is_finite() && frequency.is_finite() && out.is_finite() {
             self.rate = rate;

@@ -56,9 +56,9 @@ pub const DURATION_S: f64 = 61.0;
 pub const PRNS: [u8; 8] = [2, 5, 9, 12, 17, 21, 25, 30];
 /// IS-GPS-200 Table 3-Ia, first 10 chips (octal), PRN 1–32.
 pub const FIRST_TEN_CHIPS_OCTAL: [u16; 32] = [
-    0o1440, 0o1620, 0o1710, 0o1744, 0o1133, 0o1455, 0o1131, 0o1454, 0o1626, 0o1504, 0o1642,
-    0o1750, 0o1764, 0o1772, 0o1775, 0o1776, 0o1156, 0o1467, 0o1633, 0o1715, 0o1746, 0o1763,
-    0o1063, 0o1706, 0o1743, 0o1761, 0o1770, 0o1774, 0o1127, 0o1453, 0o1625, 0o1712,
+    0o1440, 0o1620, 0o1710, 0o1744, 0o1133, 0o1455, 0o1131, 0o1454, 0o1626, 0o1504, 0o1642, 0o1750,
+    0o1764, 0o1772, 0o1775, 0o1776, 0o1156, 0o1467, 0o1633, 0o1715, 0o1746, 0o1763, 0o1063, 0o1706,
+    0o1743, 0o1761, 0o1770, 0o1774, 0o1127, 0o1453, 0o1625, 0o1712,
 ];
 
 /// Paper 003's array: equilateral triangle of side `l`, origin at the middle of AB, X to B,
@@ -101,7 +101,11 @@ pub fn scene(cn0_dbhz: f64, seed: u64) -> Scene {
             c_rb0: Matrix3::identity(),
             omega_b: Vector3::new(0.0, 0.01, 0.0),
         },
-        front_end: FrontEnd { sample_rate_hz: SAMPLE_RATE_HZ, intermediate_frequency_hz: 0.0, complex: true },
+        front_end: FrontEnd {
+            sample_rate_hz: SAMPLE_RATE_HZ,
+            intermediate_frequency_hz: 0.0,
+            complex: true,
+        },
         noise_seed: Some(seed ^ 0x5eed_0f_5167),
     }
 }
@@ -130,7 +134,9 @@ pub fn params(cn0_dbhz: f64, seed: u64, duration_s: f64) -> ChainParams {
 fn phase_density(theta: f64, rho: f64) -> f64 {
     let c = theta.cos();
     (-rho).exp() / TAU
-        + (rho.sqrt() * c / (2.0 * PI.sqrt())) * (-rho * theta.sin().powi(2)).exp() * (1.0 + libm::erf(rho.sqrt() * c))
+        + (rho.sqrt() * c / (2.0 * PI.sqrt()))
+            * (-rho * theta.sin().powi(2)).exp()
+            * (1.0 + libm::erf(rho.sqrt() * c))
 }
 
 /// RMS (cycles) of the wrapped difference of the phases of two independent prompts at
@@ -139,7 +145,9 @@ pub fn phase_difference_rms_cycles(cn0_dbhz: f64, t: f64) -> f64 {
     let rho = 10f64.powf(cn0_dbhz / 10.0) * t;
     const M: usize = 720;
     let h = TAU / M as f64;
-    let p: Vec<f64> = (0..M).map(|k| phase_density(-PI + (k as f64 + 0.5) * h, rho) * h).collect();
+    let p: Vec<f64> = (0..M)
+        .map(|k| phase_density(-PI + (k as f64 + 0.5) * h, rho) * h)
+        .collect();
     let norm: f64 = p.iter().sum();
     let mut second = 0.0;
     for (j, pj) in p.iter().enumerate() {
@@ -169,24 +177,39 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
     let mut o = Outcome::default();
 
     let chips_ok = (1..=32u8)
-        .filter(|&n| Prn::new(n).is_some_and(|p| p.first_ten_chips_octal() == FIRST_TEN_CHIPS_OCTAL[n as usize - 1]))
+        .filter(|&n| {
+            Prn::new(n)
+                .is_some_and(|p| p.first_ten_chips_octal() == FIRST_TEN_CHIPS_OCTAL[n as usize - 1])
+        })
         .count();
     let (mut doppler_max, mut code_max) = (0.0f64, 0.0f64);
     for t in &out.tracked {
         let truth = sc.truth(t.scene_index, 0, 0.0);
-        doppler_max = doppler_max.max((f64::from(t.acquisition.doppler_hz) - truth.doppler_hz).abs());
-        let e = (f64::from(t.acquisition.code_phase_chips) - truth.code_phase_chips + 511.5).rem_euclid(1023.0) - 511.5;
+        doppler_max =
+            doppler_max.max((f64::from(t.acquisition.doppler_hz) - truth.doppler_hz).abs());
+        let e = (f64::from(t.acquisition.code_phase_chips) - truth.code_phase_chips + 511.5)
+            .rem_euclid(1023.0)
+            - 511.5;
         code_max = code_max.max(e.abs());
     }
     let stats = satellite_stats(&out, sc, cn0);
     let lock_held = if out.tracked.len() < sc.satellites.len() {
         0.0
     } else {
-        stats.iter().map(|s| s.lock_held_s).fold(f64::INFINITY, f64::min)
+        stats
+            .iter()
+            .map(|s| s.lock_held_s)
+            .fold(f64::INFINITY, f64::min)
     };
     let cn0_err = stats.iter().map(|s| s.cn0_err_max).fold(0.0, f64::max);
-    let (sum2, count) = stats.iter().fold((0.0, 0usize), |a, s| (a.0 + s.phase_sum2, a.1 + s.phase_count));
-    let phase_rms = if count > 0 { (sum2 / count as f64).sqrt() } else { f64::NAN };
+    let (sum2, count) = stats.iter().fold((0.0, 0usize), |a, s| {
+        (a.0 + s.phase_sum2, a.1 + s.phase_count)
+    });
+    let phase_rms = if count > 0 {
+        (sum2 / count as f64).sqrt()
+    } else {
+        f64::NAN
+    };
     let bound = phase_difference_rms_cycles(cn0, 1e-3);
 
     o.metric("prn_chips_ok", chips_ok)
@@ -281,7 +304,8 @@ fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
                 for x in 1..3 {
                     let b = e.prompt[x];
                     let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / TAU;
-                    let truth = sc.truth(k, x, e.t).carrier_phase_cycles - sc.truth(k, 0, e.t).carrier_phase_cycles;
+                    let truth = sc.truth(k, x, e.t).carrier_phase_cycles
+                        - sc.truth(k, 0, e.t).carrier_phase_cycles;
                     let err = wrap(measured - truth);
                     sum2 += err * err;
                     count += 1;
@@ -290,7 +314,13 @@ fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
                 }
                 if j % 1000 == 999 {
                     let doppler_err = e.doppler_hz - sc.truth(k, 0, e.t).doppler_hz;
-                    per_second.push([e.t, f64::from(t.acquisition.prn.number()), e.cn0_dbhz, doppler_err, (second.0 / second.1.max(1) as f64).sqrt()]);
+                    per_second.push([
+                        e.t,
+                        f64::from(t.acquisition.prn.number()),
+                        e.cn0_dbhz,
+                        doppler_err,
+                        (second.0 / second.1.max(1) as f64).sqrt(),
+                    ]);
                     second = (0.0, 0, 0.0);
                 }
             }
@@ -308,13 +338,25 @@ fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
         .collect()
 }
 
-fn write_files(dir: &std::path::Path, params: &ChainParams, out: &ChainOutput, o: &mut Outcome, cn0: f64) -> Result<()> {
+fn write_files(
+    dir: &std::path::Path,
+    params: &ChainParams,
+    out: &ChainOutput,
+    o: &mut Outcome,
+    cn0: f64,
+) -> Result<()> {
     std::fs::create_dir_all(dir)?;
     let stats = satellite_stats(out, &params.scene, cn0);
     let csv = dir.join("signal_per_second.csv");
     write_csv(
         &csv,
-        &["t_s", "prn", "cn0_dbhz", "doppler_err_hz", "phase_diff_err_rms_cycles"],
+        &[
+            "t_s",
+            "prn",
+            "cn0_dbhz",
+            "doppler_err_hz",
+            "phase_diff_err_rms_cycles",
+        ],
         stats.iter().flat_map(|s| s.per_second.iter().copied()),
     )?;
     o.files.push(csv);
@@ -323,7 +365,13 @@ fn write_files(dir: &std::path::Path, params: &ChainParams, out: &ChainOutput, o
         stats
             .iter()
             .enumerate()
-            .map(|(c, s)| Series::line(format!("PRN {}", s.prn), s.per_second.iter().map(|r| (r[0], r[col])).collect(), c))
+            .map(|(c, s)| {
+                Series::line(
+                    format!("PRN {}", s.prn),
+                    s.per_second.iter().map(|r| (r[0], r[col])).collect(),
+                    c,
+                )
+            })
             .collect()
     };
     plot_panels(
@@ -331,9 +379,18 @@ fn write_files(dir: &std::path::Path, params: &ChainParams, out: &ChainOutput, o
         &format!("signal: 8 satellites at {cn0} dB-Hz, three antennas, CS8 2.6 Msps"),
         "time (s)",
         &[
-            Panel { y_label: "C/N0 estimate (dB-Hz)".into(), series: series(2) },
-            Panel { y_label: "Doppler error (Hz)".into(), series: series(3) },
-            Panel { y_label: "phase-difference error RMS per s (cycle)".into(), series: series(4) },
+            Panel {
+                y_label: "C/N0 estimate (dB-Hz)".into(),
+                series: series(2),
+            },
+            Panel {
+                y_label: "Doppler error (Hz)".into(),
+                series: series(3),
+            },
+            Panel {
+                y_label: "phase-difference error RMS per s (cycle)".into(),
+                series: series(4),
+            },
         ],
     )?;
     o.files.push(png);
@@ -342,7 +399,10 @@ fn write_files(dir: &std::path::Path, params: &ChainParams, out: &ChainOutput, o
     let analog = params.scene.synthesize(0, n);
     let streams = encode(SampleFormat::Cs8, &analog)?;
     let paths = write_streams(dir, "signal_first_100ms", SampleFormat::Cs8, &streams)?;
-    anyhow::ensure!(read_streams(&paths)? == streams, "CS8 files do not read back");
+    anyhow::ensure!(
+        read_streams(&paths)? == streams,
+        "CS8 files do not read back"
+    );
     o.files.extend(paths);
     Ok(())
 }

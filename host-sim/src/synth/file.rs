@@ -27,12 +27,19 @@ pub fn paths(dir: &Path, stem: &str, format: SampleFormat, streams: usize) -> Ve
     if streams == 1 {
         vec![dir.join(format!("{stem}.{ext}"))]
     } else {
-        (0..streams).map(|a| dir.join(format!("{stem}.ant{a}.{ext}"))).collect()
+        (0..streams)
+            .map(|a| dir.join(format!("{stem}.ant{a}.{ext}")))
+            .collect()
     }
 }
 
 /// Writes the streams; returns the paths written.
-pub fn write_streams(dir: &Path, stem: &str, format: SampleFormat, streams: &[Vec<u8>]) -> Result<Vec<PathBuf>> {
+pub fn write_streams(
+    dir: &Path,
+    stem: &str,
+    format: SampleFormat,
+    streams: &[Vec<u8>],
+) -> Result<Vec<PathBuf>> {
     let paths = paths(dir, stem, format, streams.len());
     for (p, s) in paths.iter().zip(streams) {
         fs::write(p, s).with_context(|| format!("writing {}", p.display()))?;

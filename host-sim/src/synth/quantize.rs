@@ -43,7 +43,10 @@ pub fn encode(format: SampleFormat, antennas: &[AnalogSamples]) -> Result<Vec<Ve
     }
     if let SampleFormat::MultiChannel2 { channels } = format {
         if usize::from(channels) != antennas.len() {
-            bail!("format has {channels} channels, scene has {} antennas", antennas.len());
+            bail!(
+                "format has {channels} channels, scene has {} antennas",
+                antennas.len()
+            );
         }
         let n = antennas.first().map_or(0, |a| a.i.len());
         let mut out = vec![0u8; n];
@@ -58,9 +61,9 @@ pub fn encode(format: SampleFormat, antennas: &[AnalogSamples]) -> Result<Vec<Ve
         .iter()
         .map(|a| {
             let n = a.i.len();
-            let bytes = format
-                .bytes_for(n)
-                .ok_or_else(|| anyhow::anyhow!("{n} samples do not fill whole bytes of {format:?}"))?;
+            let bytes = format.bytes_for(n).ok_or_else(|| {
+                anyhow::anyhow!("{n} samples do not fill whole bytes of {format:?}")
+            })?;
             let mut out = vec![0u8; bytes];
             match format {
                 SampleFormat::Cs8 => {
@@ -115,7 +118,12 @@ pub struct Planar {
 }
 
 /// Decodes encoded streams (as [`encode`] makes them) with the core's decoder.
-pub fn decode(format: SampleFormat, streams: &[Vec<u8>], antennas: usize, n: usize) -> Result<Planar> {
+pub fn decode(
+    format: SampleFormat,
+    streams: &[Vec<u8>],
+    antennas: usize,
+    n: usize,
+) -> Result<Planar> {
     let mut p = Planar::default();
     for a in 0..antennas {
         let (stream, channel) = match format {

@@ -140,7 +140,9 @@ impl Scene {
     /// The truth of satellite `sat` at antenna `antenna` at time `t` (s).
     pub fn truth(&self, sat: usize, antenna: usize, t: f64) -> SignalTruth {
         let s = &self.satellites[sat];
-        let geo_m = s.los_ref.dot(&(self.attitude.c_rb(t) * self.antennas_b[antenna]));
+        let geo_m = s
+            .los_ref
+            .dot(&(self.attitude.c_rb(t) * self.antennas_b[antenna]));
         let dopp_cycles = s.doppler_hz * t + 0.5 * s.doppler_rate_hz_s * t * t;
         let code = s.code_phase_chips
             + CHIP_RATE * t
@@ -190,7 +192,14 @@ impl Scene {
         out
     }
 
-    fn fill(&self, antenna: usize, k0: u64, out_i: &mut [f32], out_q: &mut [f32], codes: &[Vec<f32>]) {
+    fn fill(
+        &self,
+        antenna: usize,
+        k0: u64,
+        out_i: &mut [f32],
+        out_q: &mut [f32],
+        codes: &[Vec<f32>],
+    ) {
         let fe = &self.front_end;
         let fs = fe.sample_rate_hz;
         let n = out_i.len();
@@ -198,7 +207,12 @@ impl Scene {
         let t_mid = (k0 as f64 + 0.5 * n as f64) / fs;
         let dt = 1.0 / fs;
         for (si, s) in self.satellites.iter().enumerate() {
-            let amp = self.amplitude(si) * if fe.complex { 1.0 } else { std::f64::consts::SQRT_2 };
+            let amp = self.amplitude(si)
+                * if fe.complex {
+                    1.0
+                } else {
+                    std::f64::consts::SQRT_2
+                };
             let tr0 = self.truth(si, antenna, t0);
             let tr_mid = self.truth(si, antenna, t_mid);
             // Rates over the sub-block from the exact phases at its start and middle.
