@@ -406,6 +406,7 @@ impl<const A: usize> Correlator<A> {
         let mut sin = [0i16; CHUNK];
         let mut code = [0i16; CHUNK + 2 * MAX_EARLY_LATE_OFFSET];
         let mut noise = [0i16; CHUNK];
+        let mut scratch = Scratch::new();
         let step = self.code.step;
         let mut done = 0usize;
         while done < n {
@@ -442,11 +443,10 @@ impl<const A: usize> Correlator<A> {
                 noise: noise.get(..m).unwrap_or_default(),
             };
             for (a, acc) in self.acc.iter_mut().enumerate() {
-                let part = match block.span(a, start + done, m) {
-                    Some((i, Some(q))) => correlate_complex(i, q, &replica),
-                    Some((i, None)) => correlate_real(i, &replica),
-                    None => [0; 8],
+                let Some((i, q)) = block.span(a, start + done, m) else {
+                    continue;
                 };
+                let part = correlate_antenna(i, q, &replica, &mut scratch);
                 for (x, p) in acc.iter_mut().zip(part.iter()) {
                     *x = x.wrapping_add(*p);
                 }
@@ -496,7 +496,9 @@ fn fill_code(out: &mut [i16], prn: Prn, phase: u64, step: u64) {
         let to_wrap = if step == 0 {
             rest.len()
         } else {
-            ((CODE_WRAP - phase).div_ceil(step) as usize).clamp(1, rest.len())
+            ((CODE_WRAP - phase).div_ceil(step) as usize)
+                .max(1)
+                .min(rest.len())
         };
         let (head, tail) = core::mem::take(&mut rest).split_at_mut(to_wrap);
         let mut ph = phase;
@@ -509,8 +511,64 @@ fn fill_code(out: &mut [i16], prn: Prn, phase: u64, step: u64) {
     }
 }
 
-/// Complex samples: `m = x · (c − js)`, then the four taps. Integer only; see the overflow
-/// analysis in the module docs.
+/// Mixed-sample buffers of the Arm path (empty elsewhere).
+struct Scratch {
+    #[cfg(target_arch = "arm")]
+    mi: [i16; CHUNK],
+    #[cfg(target_arch = "arm")]
+    mq: [i16; CHUNK],
+}
+
+impl Scratch {
+    fn new() -> Self {
+        Self {
+            #[cfg(target_arch = "arm")]
+            mi: [0; CHUNK],
+            #[cfg(target_arch = "arm")]
+            mq: [0; CHUNK],
+        }
+    }
+}
+
+/// The four taps of one antenna over one chunk: `[E_I, E_Q, P_I, P_Q, L_I, L_Q, N_I, N_Q]`.
+///
+/// Two implementations with identical integer results (no overflow, see the module docs):
+/// on hosts one fused pass that SIMD units vectorize; on 32-bit Arm (Cortex-M4) a mixing pass
+/// into `i16` buffers and two tap passes of four accumulators each, which keeps every operand
+/// in the M4's registers (the fused pass needs 8 accumulators and 8 pointers and spills). The
+/// firmware self-check compares the Arm path with the host's integers bit for bit.
+#[inline]
+fn correlate_antenna(
+    xi: &[i8],
+    xq: Option<&[i8]>,
+    r: &Replica<'_>,
+    scratch: &mut Scratch,
+) -> [i32; 8] {
+    #[cfg(target_arch = "arm")]
+    {
+        let n = xi.len().min(CHUNK);
+        let mi = scratch.mi.get_mut(..n).unwrap_or_default();
+        let mq = scratch.mq.get_mut(..n).unwrap_or_default();
+        match xq {
+            Some(q) => mix_complex(xi, q, r.cos, r.sin, mi, mq),
+            None => mix_real(xi, r.cos, r.sin, mi, mq),
+        }
+        let ep = taps_pair(mi, mq, r.early, r.prompt);
+        let ln = taps_pair(mi, mq, r.late, r.noise);
+        [ep[0], ep[1], ep[2], ep[3], ln[0], ln[1], ln[2], ln[3]]
+    }
+    #[cfg(not(target_arch = "arm"))]
+    {
+        let _ = scratch;
+        match xq {
+            Some(q) => correlate_complex(xi, q, r),
+            None => correlate_real(xi, r),
+        }
+    }
+}
+
+/// Fused pass, complex samples: `m = x · (c − js)`, then the four taps.
+#[cfg(not(target_arch = "arm"))]
 #[inline]
 fn correlate_complex(xi: &[i8], xq: &[i8], r: &Replica<'_>) -> [i32; 8] {
     let mut a = [0i32; 8];
@@ -525,9 +583,7 @@ fn correlate_complex(xi: &[i8], xq: &[i8], r: &Replica<'_>) -> [i32; 8] {
         .zip(r.noise);
     for (((((((&i, &q), &c), &s), &e), &p), &l), &z) in it {
         let (i, q) = (i16::from(i), i16::from(q));
-        let mi = i * c + q * s;
-        let mq = q * c - i * s;
-        let (mi, mq) = (i32::from(mi), i32::from(mq));
+        let (mi, mq) = (i32::from(i * c + q * s), i32::from(q * c - i * s));
         a[0] += mi * i32::from(e);
         a[1] += mq * i32::from(e);
         a[2] += mi * i32::from(p);
@@ -540,7 +596,8 @@ fn correlate_complex(xi: &[i8], xq: &[i8], r: &Replica<'_>) -> [i32; 8] {
     a
 }
 
-/// Real samples: `m = x · (c − js)`, then the four taps.
+/// Fused pass, real samples.
+#[cfg(not(target_arch = "arm"))]
 #[inline]
 fn correlate_real(xi: &[i8], r: &Replica<'_>) -> [i32; 8] {
     let mut a = [0i32; 8];
@@ -565,4 +622,57 @@ fn correlate_real(xi: &[i8], r: &Replica<'_>) -> [i32; 8] {
         a[7] += mq * i32::from(z);
     }
     a
+}
+
+/// Pass 1, complex samples: `m = x · (c − js)` into `i16` (fits: see the overflow analysis).
+#[cfg(target_arch = "arm")]
+#[inline]
+fn mix_complex(xi: &[i8], xq: &[i8], cos: &[i16], sin: &[i16], mi: &mut [i16], mq: &mut [i16]) {
+    let it = xi
+        .iter()
+        .zip(xq)
+        .zip(cos)
+        .zip(sin)
+        .zip(mi.iter_mut())
+        .zip(mq.iter_mut());
+    for (((((&i, &q), &c), &s), oi), oq) in it {
+        let (i, q) = (i16::from(i), i16::from(q));
+        *oi = i * c + q * s;
+        *oq = q * c - i * s;
+    }
+}
+
+/// Pass 1, real samples: `m = x · (c − js)`.
+#[cfg(target_arch = "arm")]
+#[inline]
+fn mix_real(xi: &[i8], cos: &[i16], sin: &[i16], mi: &mut [i16], mq: &mut [i16]) {
+    let it = xi
+        .iter()
+        .zip(cos)
+        .zip(sin)
+        .zip(mi.iter_mut())
+        .zip(mq.iter_mut());
+    for ((((&i, &c), &s), oi), oq) in it {
+        let i = i16::from(i);
+        *oi = i * c;
+        *oq = -i * s;
+    }
+}
+
+/// Pass 2: the I and Q sums of the mixed samples against two code replicas `a`, `b`:
+/// `[Σ m_I a, Σ m_Q a, Σ m_I b, Σ m_Q b]`. Written over sample pairs of 16-bit operands, the
+/// shape that DSP-extension cores (Cortex-M4) execute as dual multiply-accumulates and that
+/// SIMD hosts vectorize; four accumulators keep every operand in a register.
+#[cfg(target_arch = "arm")]
+#[inline]
+fn taps_pair(mi: &[i16], mq: &[i16], a: &[i16], b: &[i16]) -> [i32; 4] {
+    let mut acc = [0i32; 4];
+    let w = |x: i16| i32::from(x);
+    for (((&xi, &xq), &ca), &cb) in mi.iter().zip(mq).zip(a).zip(b) {
+        acc[0] += w(xi) * w(ca);
+        acc[1] += w(xq) * w(ca);
+        acc[2] += w(xi) * w(cb);
+        acc[3] += w(xq) * w(cb);
+    }
+    acc
 }

@@ -15,6 +15,7 @@ pub mod ca_code;
 pub mod correlator;
 pub mod nco;
 pub mod samples;
+pub mod selftest;
 
 pub use block::SampleBlock;
 pub use ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};

@@ -95,9 +95,13 @@ impl CarrierNco {
     pub fn step_for(frequency_hz: f64, sample_rate_hz: f64) -> u32 {
         let cycles_per_sample = frequency_hz / sample_rate_hz;
         let word = libm::round(cycles_per_sample * 4_294_967_296.0);
-        // Reduce to one cycle first: any finite value maps to a defined word.
-        let word = libm::fmod(word, 4_294_967_296.0);
-        (word as i64) as u32
+        // Reduce to one cycle first (floor, not fmod: libm's fmod keeps panic paths): any
+        // finite value maps to a defined word; non-finite gives 0.
+        if !word.is_finite() {
+            return 0;
+        }
+        let word = word - libm::floor(word / 4_294_967_296.0) * 4_294_967_296.0;
+        (word as u64) as u32
     }
 
     /// The frequency, Hz, that the current step represents.
@@ -141,10 +145,7 @@ impl CodeNco {
         if !chips.is_finite() {
             return 0;
         }
-        let mut c = libm::fmod(chips, 1023.0);
-        if c < 0.0 {
-            c += 1023.0;
-        }
+        let c = chips - libm::floor(chips / 1023.0) * 1023.0;
         let word = libm::round(c * 4_294_967_296.0) as u64;
         if word >= CODE_WRAP {
             word - CODE_WRAP

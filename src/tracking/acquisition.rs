@@ -244,10 +244,7 @@ impl<const N: usize> Acquisition<N> {
         };
         let lag = best.2 as f32 + delta;
         let mut code_phase = (N as f32 - lag) * (CA_CODE_LENGTH as f32 / N as f32);
-        code_phase = libm::fmodf(code_phase, CA_CODE_LENGTH as f32);
-        if code_phase < 0.0 {
-            code_phase += CA_CODE_LENGTH as f32;
-        }
+        code_phase -= libm::floorf(code_phase / CA_CODE_LENGTH as f32) * CA_CODE_LENGTH as f32;
         // Doppler: parabola through the neighbouring bins' peak amplitudes.
         let amp = |b: usize| self.peaks.get(b).map_or(0.0, |p| libm::sqrtf(p.0));
         let bd = best.1;
