@@ -51,6 +51,10 @@ pub struct EpochRecord {
     pub doppler_hz: f64,
     /// Code lock and phase lock.
     pub locked: bool,
+    /// Data-bit edges known.
+    pub bit_sync: bool,
+    /// A data bit decoded at this epoch.
+    pub data_bit: Option<i8>,
     /// Replica code phase at the epoch's first sample, chips.
     pub code_phase_chips: f64,
     /// Receiver sample index of the epoch's first sample.
@@ -182,6 +186,8 @@ fn record(e: &TrackingEpoch<ANTENNAS>, fs: f64) -> EpochRecord {
         cn0_dbhz: f64::from(e.cn0_dbhz),
         doppler_hz: f64::from(e.doppler_hz),
         locked: e.lock.code && e.lock.phase,
+        bit_sync: e.lock.bit_sync,
+        data_bit: e.data_bit,
         code_phase_chips: c.code_phase_at_first as f64 / 4_294_967_296.0,
         first_sample: c.first_sample,
     }

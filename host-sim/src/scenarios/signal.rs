@@ -5,7 +5,7 @@
 //! 50 bit/s data; paper 003's array (equilateral triangle, side 1.5 m, origin at the middle of
 //! AB) turning about the body Y axis at 0.01 rad/s; line biases 0, 0.13, −0.27 cycle; complex
 //! CS8 samples at 2.6 Msps (noise σ = 16 LSB). The chain: acquisition of all 32 PRNs on the
-//! reference antenna (40 ms, ±10 kHz in 500 Hz bins, P_fa = 10⁻³ per PRN), then tracking of
+//! reference antenna (40 ms, ±10 kHz in 500 Hz bins, P_fa = 10⁻⁵ per PRN), then tracking of
 //! the detected ones for 61 s (so that lock can be held for 60 s after pull-in).
 //!
 //! Metrics: `prn_chips_ok` (core codes matching IS-GPS-200's first 10 chips, of 32),
@@ -121,7 +121,10 @@ pub fn params(cn0_dbhz: f64, seed: u64, duration_s: f64) -> ChainParams {
             doppler_max_hz: 10_000.0,
             doppler_step_hz: 500.0,
             noncoherent_ms: 40,
-            false_alarm_probability: 1e-3,
+            // The threshold's Gamma model holds for noise only; the cross-correlation of eight
+            // 45 dB-Hz satellites fattens the tail (at 10⁻³ one absent PRN crossed it), so
+            // the scenario asks for 10⁻⁵ (threshold 2.35 instead of 2.15).
+            false_alarm_probability: 1e-5,
         },
         search_prns: (1..=32).collect(),
         channel: ChannelConfig::new(SAMPLE_RATE_HZ, 0.0),
@@ -211,6 +214,13 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
         f64::NAN
     };
     let bound = phase_difference_rms_cycles(cn0, 1e-3);
+    // Multiple-access interference: each other satellite leaks SNR_j · E|ρ|² ≈ SNR_j/1023 of
+    // noise power into a prompt (Gold-code cross-correlation), so the receiver sees
+    // C/(N0 + I0), not the synthesized thermal C/N0.
+    let snr = 10f64.powf(cn0 / 10.0) * 1e-3;
+    let interference = (sc.satellites.len() as f64 - 1.0) * snr / 1023.0;
+    let mai_db = 10.0 * (1.0 + interference).log10();
+    let bound_mai = phase_difference_rms_cycles(cn0 - mai_db, 1e-3);
 
     o.metric("prn_chips_ok", chips_ok)
         .metric("acq_found", out.tracked.len())
@@ -233,6 +243,9 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
         sc.satellites.len(),
         out.seconds.0,
         out.seconds.1
+    ));
+    o.summary.push(format!(
+        "multiple-access interference of the other satellites: I0/N0 = {interference:.3} ({mai_db:.2} dB below the thermal C/N0); phase-difference bound with it {bound_mai:.4} cycle (thermal only {bound:.4})"
     ));
     for s in &stats {
         o.summary.push(format!(
