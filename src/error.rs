@@ -174,7 +174,7 @@ pub enum SignalError {
     /// A frequency, rate or phase was NaN or infinite.
     NonFinite,
     /// A configuration value is out of range: sample rate outside 1.023–64 MHz, IF beyond the
-    /// sample rate, early/late offset outside (0, 1] chip, a carrier frequency beyond ±f_s/2,
+    /// sample rate, early/late offset outside (0, 1] chip, a carrier frequency beyond ±`f_s`/2,
     /// a code rate more than 1 % off nominal, or no antennas.
     InvalidConfig,
     /// The antennas' sample slices of a block differ in length.

@@ -1,6 +1,6 @@
 //! Drivers that configure the multi-channel RF front end over SPI (embedded-hal 1.0).
 //!
-//! * [`nt1065`]: NTLab NT1065, four phase-coherent channels from one synthesizer.
+//! * [`nt1065`]: `NTLab` NT1065, four phase-coherent channels from one synthesizer.
 
 pub mod nt1065;
 

@@ -1,4 +1,4 @@
-//! An embedded-hal 1.0 SPI driver for the NTLab NT1065 four-channel GNSS front end.
+//! An embedded-hal 1.0 SPI driver for the `NTLab` NT1065 four-channel GNSS front end.
 //!
 //! The NT1065 has four RF channels fed from one or two on-chip synthesizers (PLL A, PLL B).
 //! With every channel on PLL A, all four down-conversions share one LO and one ADC clock, so

@@ -172,7 +172,7 @@ impl CorrelatorConfig {
     /// early/late offset outside (0, 1] chip or above [`MAX_EARLY_LATE_OFFSET`] samples.
     pub fn validate(&self) -> Result<(), SignalError> {
         let fs = self.sample_rate_hz;
-        if !(fs >= MIN_SAMPLE_RATE_HZ && fs <= MAX_SAMPLE_RATE_HZ) {
+        if !(MIN_SAMPLE_RATE_HZ..=MAX_SAMPLE_RATE_HZ).contains(&fs) {
             return Err(SignalError::InvalidConfig);
         }
         if !(self.intermediate_frequency_hz.abs() < fs) {

@@ -5,7 +5,7 @@
 //!
 //! | Format | Kind | Layout |
 //! |---|---|---|
-//! | [`SampleFormat::Cs8`] | complex | interleaved `I0 Q0 I1 Q1 …`, each a signed byte (HackRF, rtl-sdr after offset removal, GNSS-SDR `ibyte`, Pocket SDR `INT8X2`) |
+//! | [`SampleFormat::Cs8`] | complex | interleaved `I0 Q0 I1 Q1 …`, each a signed byte (`HackRF`, rtl-sdr after offset removal, GNSS-SDR `ibyte`, Pocket SDR `INT8X2`) |
 //! | [`SampleFormat::Cs16`] | complex | interleaved `I0 Q0 …`, each a little-endian signed 16-bit word (USRP `sc16`, GNSS-SDR `ishort`); decoded as `round(v / 2^shift)` saturated to `−128..=127` (the shift is the receiver's gain setting) |
 //! | [`SampleFormat::Int8`] | real | one signed byte per sample (real IF) |
 //! | [`SampleFormat::SignMagnitude2`] | real or complex | four 2-bit fields per byte, **first sample in the two most significant bits**; in each field the high bit is the sign (1 = negative) and the low bit the magnitude (1 = large): `00 → +1, 01 → +3, 10 → −1, 11 → −3` (MAX2769 / NT1065 two-bit ADC outputs `SIGN`, `MAG`). Complex: fields alternate I, Q |

@@ -86,9 +86,11 @@ impl AcquisitionConfig {
             return Err(AcquisitionError::NonFinite);
         }
         let fs = self.sample_rate_hz;
-        if !(fs >= CA_CHIP_RATE_HZ && fs <= 64e6)
-            || !(self.intermediate_frequency_hz.abs() < fs)
-            || !(self.doppler_step_hz >= 10.0 && self.doppler_max_hz >= 0.0)
+        let front_end_ok =
+            (CA_CHIP_RATE_HZ..=64e6).contains(&fs) && self.intermediate_frequency_hz.abs() < fs;
+        let doppler_ok = self.doppler_step_hz >= 10.0 && self.doppler_max_hz >= 0.0;
+        if !front_end_ok
+            || !doppler_ok
             || self.doppler_bins() == 0
             || self.doppler_bins() > MAX_DOPPLER_BINS
             || self.noncoherent_ms == 0

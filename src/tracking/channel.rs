@@ -376,7 +376,7 @@ impl<const A: usize> Channel<A> {
         // Lock and C/N0 windows.
         self.lock_window.add(&p, &reference.noise);
         self.cn0_window.add(&p, &reference.noise);
-        if u32::from(self.lock_window.count()) >= u32::from(cfg.lock_window) {
+        if self.lock_window.count() >= u32::from(cfg.lock_window) {
             if let Some(e) = self.lock_window.finish(t) {
                 self.lock.update(e.cn0_dbhz, e.phase_lock_indicator);
                 if !self.long_estimate {
@@ -384,7 +384,7 @@ impl<const A: usize> Channel<A> {
                 }
             }
         }
-        if u32::from(self.cn0_window.count()) >= u32::from(cfg.cn0_window) {
+        if self.cn0_window.count() >= u32::from(cfg.cn0_window) {
             if let Some(e) = self.cn0_window.finish(t) {
                 self.cn0_dbhz = e.cn0_dbhz;
                 self.long_estimate = true;

@@ -106,7 +106,7 @@ pub fn scene(cn0_dbhz: f64, seed: u64) -> Scene {
             intermediate_frequency_hz: 0.0,
             complex: true,
         },
-        noise_seed: Some(seed ^ 0x5eed_0f_5167),
+        noise_seed: Some(seed ^ 0x005e_ed0f_5167),
     }
 }
 
@@ -143,7 +143,7 @@ fn phase_density(theta: f64, rho: f64) -> f64 {
 }
 
 /// RMS (cycles) of the wrapped difference of the phases of two independent prompts at
-/// `(C/N0)·T`: numerical circular convolution of [`phase_density`] on a 720-point grid.
+/// `(C/N0)·T`: numerical circular convolution of the phase density of a noisy phasor on a 720-point grid.
 pub fn phase_difference_rms_cycles(cn0_dbhz: f64, t: f64) -> f64 {
     let rho = 10f64.powf(cn0_dbhz / 10.0) * t;
     const M: usize = 720;

@@ -5,7 +5,7 @@
 //!   biases; thermal noise at a given C/N0) and the parallel sample generator.
 //! * [`quantize`]: front-end quantization into the core's sample formats, and decoding back
 //!   with the core's decoder.
-//! * [`file`]: CS8/CS16 (and the other formats') files, written and read back.
+//! * [`file`](mod@file): CS8/CS16 (and the other formats') files, written and read back.
 //! * [`codes`]: the synthesizer's own C/A code generator.
 
 pub mod codes;

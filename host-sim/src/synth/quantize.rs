@@ -81,8 +81,8 @@ pub fn encode(format: SampleFormat, antennas: &[AnalogSamples]) -> Result<Vec<Ve
                     }
                 }
                 SampleFormat::Int8 => {
-                    for k in 0..n {
-                        out[k] = sat8(a.i[k], CS8_GAIN);
+                    for (o, &x) in out.iter_mut().zip(&a.i) {
+                        *o = sat8(x, CS8_GAIN);
                     }
                 }
                 SampleFormat::SignMagnitude2 { complex: false } => {
