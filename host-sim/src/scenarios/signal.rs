@@ -244,6 +244,14 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
         out.seconds.0,
         out.seconds.1
     ));
+    let cn0_err_mai = stats
+        .iter()
+        .map(|s| s.cn0_err_max_vs(cn0 - mai_db))
+        .fold(0.0, f64::max);
+    o.summary.push(format!(
+        "C/N0 error against C/(N0 + I0) = {:.2} dB-Hz (what a prompt/noise-tap estimator measures): max {cn0_err_mai:.2} dB",
+        cn0 - mai_db
+    ));
     o.summary.push(format!(
         "multiple-access interference of the other satellites: I0/N0 = {interference:.3} ({mai_db:.2} dB below the thermal C/N0); phase-difference bound with it {bound_mai:.4} cycle (thermal only {bound:.4})"
     ));
@@ -266,6 +274,7 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
 
 struct SatStats {
     prn: u8,
+    cn0_reports: Vec<f64>,
     lock_held_s: f64,
     first_lock_s: f64,
     cn0_err_max: f64,
@@ -273,6 +282,15 @@ struct SatStats {
     phase_sum2: f64,
     phase_count: usize,
     per_second: Vec<[f64; 5]>,
+}
+
+impl SatStats {
+    fn cn0_err_max_vs(&self, reference: f64) -> f64 {
+        self.cn0_reports
+            .iter()
+            .map(|c| (c - reference).abs())
+            .fold(0.0, f64::max)
+    }
 }
 
 fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
@@ -302,16 +320,27 @@ fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
             let (mut cn0_err, mut cn0_sum, mut cn0_n) = (0.0f64, 0.0, 0usize);
             let (mut sum2, mut count) = (0.0, 0usize);
             let mut per_second = Vec::new();
-            let mut second = (0.0, 0usize, 0.0);
+            let mut second = (0.0, 0usize, 2.0f64);
             for (j, e) in t.epochs.iter().enumerate() {
                 if e.t < 2.0 {
                     continue;
                 }
-                // C/N0 reports change once per second: sample them at each new value.
+                // C/N0 reports change once per second: sample them once per 1000 epochs.
                 if j % 1000 == 0 {
                     cn0_err = cn0_err.max((e.cn0_dbhz - cn0).abs());
                     cn0_sum += e.cn0_dbhz;
                     cn0_n += 1;
+                }
+                if e.t.floor() > second.2 && second.1 > 0 {
+                    let doppler_err = e.doppler_hz - sc.truth(k, 0, e.t).doppler_hz;
+                    per_second.push([
+                        second.2 + 1.0,
+                        f64::from(t.acquisition.prn.number()),
+                        e.cn0_dbhz,
+                        doppler_err,
+                        (second.0 / second.1 as f64).sqrt(),
+                    ]);
+                    second = (0.0, 0, e.t.floor());
                 }
                 let a = e.prompt[0];
                 for x in 1..3 {
@@ -325,20 +354,16 @@ fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
                     second.0 += err * err;
                     second.1 += 1;
                 }
-                if j % 1000 == 999 {
-                    let doppler_err = e.doppler_hz - sc.truth(k, 0, e.t).doppler_hz;
-                    per_second.push([
-                        e.t,
-                        f64::from(t.acquisition.prn.number()),
-                        e.cn0_dbhz,
-                        doppler_err,
-                        (second.0 / second.1.max(1) as f64).sqrt(),
-                    ]);
-                    second = (0.0, 0, 0.0);
-                }
             }
             SatStats {
                 prn: t.acquisition.prn.number(),
+                cn0_reports: t
+                    .epochs
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, e)| e.t >= 2.0 && j % 1000 == 0)
+                    .map(|(_, e)| e.cn0_dbhz)
+                    .collect(),
                 lock_held_s: best,
                 first_lock_s: first_lock,
                 cn0_err_max: cn0_err,
