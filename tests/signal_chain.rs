@@ -642,7 +642,7 @@ fn tracking_holds_lock_and_recovers_phase_differences() {
             }
             let n = after.iter().filter(|e| e.t > 1.0).count() as f64;
             let rms = (err2 / n).sqrt();
-            let bound = host_sim::scenarios::signal::phase_difference_rms_cycles(cn0, 1e-3);
+            let bound = host_sim::stats::phase_difference_rms_cycles(cn0, 1e-3);
             eprintln!(
                 "{cn0} dB-Hz PRN {}: locked at {:.2} s, all locked after: {}, C/N0 {:.1}, Doppler err {:.2} Hz, phase diff rms {rms:.4} cycles (bound {bound:.4})",
                 t.acquisition.prn.number(),
@@ -725,4 +725,19 @@ fn acquisition_covers_leo_doppler() {
         r.doppler_hz
     );
     assert!(code_err.abs() <= 0.5, "{code_err}");
+}
+
+/// The exact phase-difference bound the scenario reports tends to the high-SNR formula
+/// `1/(2π √((C/N0) T))` and exceeds it at low SNR.
+#[test]
+fn phase_difference_bound_matches_its_high_snr_limit() {
+    use host_sim::stats::phase_difference_rms_cycles;
+    let approx = |cn0: f64| 1.0 / (std::f64::consts::TAU * (10f64.powf(cn0 / 10.0) * 1e-3).sqrt());
+    let high = phase_difference_rms_cycles(55.0, 1e-3);
+    assert!(
+        (high / approx(55.0) - 1.0).abs() < 0.01,
+        "{high} vs {}",
+        approx(55.0)
+    );
+    assert!(phase_difference_rms_cycles(35.0, 1e-3) > 1.1 * approx(35.0));
 }

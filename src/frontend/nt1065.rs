@@ -227,6 +227,7 @@ pub struct PllStatus {
 
 /// The driver, over any embedded-hal 1.0 [`SpiDevice`] (chip select handled by the device).
 #[derive(Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Nt1065<SPI> {
     spi: SPI,
 }

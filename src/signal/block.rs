@@ -7,6 +7,7 @@ use crate::error::SignalError;
 /// same length. `first_sample` is the receiver's running sample index of element 0 (the time
 /// scale every output is stamped in).
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SampleBlock<'a, const A: usize> {
     first_sample: u64,
     i: [&'a [i8]; A],

@@ -13,6 +13,7 @@
 pub mod block;
 pub mod ca_code;
 pub mod correlator;
+mod kernels;
 pub mod nco;
 pub mod samples;
 pub mod selftest;

@@ -125,6 +125,7 @@ pub struct SearchResult {
 
 /// The acquisition engine with its fixed workspace (`N` bins per millisecond).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Acquisition<const N: usize> {
     fft: Fft<N>,
     code: [Complex; N],

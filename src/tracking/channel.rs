@@ -22,108 +22,14 @@
 
 use super::acquisition::SearchResult;
 use super::cn0::PowerWindow;
+pub use super::config::ChannelConfig;
 use super::lock::{BitSync, LockDetector};
 use super::loops::{costas_cycles, dll_chips, dll_correction, fll_hz, CarrierLoop};
+pub use super::refine::{refine_frequency, REFINEMENT_EPOCHS, REFINEMENT_RANGE_HZ};
 use crate::error::TrackingError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
-use crate::signal::correlator::{Correlator, CorrelatorConfig, EpochCorrelations, Iq};
+use crate::signal::correlator::{Correlator, EpochCorrelations, Iq};
 use crate::signal::SampleBlock;
-
-/// Epochs of the frequency-refinement stage after a hand-over.
-pub const REFINEMENT_EPOCHS: usize = 256;
-
-/// Half-range of the refinement's frequency search, Hz.
-pub const REFINEMENT_RANGE_HZ: f32 = 250.0;
-
-/// Configuration of a channel (front end and loop parameters).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct ChannelConfig {
-    /// Sample rate, Hz.
-    pub sample_rate_hz: f64,
-    /// Intermediate frequency, Hz.
-    pub intermediate_frequency_hz: f64,
-    /// Early/late offset from prompt, chips.
-    pub early_late_offset_chips: f32,
-    /// Duration of the pull-in schedule after hand-over, ms.
-    pub pull_in_ms: u32,
-    /// PLL noise bandwidth, Hz.
-    pub pll_bandwidth_hz: f32,
-    /// FLL-assist bandwidth during pull-in, Hz.
-    pub fll_pull_in_bandwidth_hz: f32,
-    /// FLL-assist bandwidth after pull-in, Hz (0: pure PLL).
-    pub fll_bandwidth_hz: f32,
-    /// DLL bandwidth during pull-in, Hz.
-    pub dll_pull_in_bandwidth_hz: f32,
-    /// DLL bandwidth after pull-in, Hz.
-    pub dll_bandwidth_hz: f32,
-    /// Lock-detector window, epochs.
-    pub lock_window: u16,
-    /// C/N0 reporting window, epochs.
-    pub cn0_window: u16,
-    /// Code-lock C/N0 threshold, dB-Hz.
-    pub cn0_lock_threshold_dbhz: f32,
-    /// Phase-lock indicator threshold (≈ cos 2Δφ).
-    pub pld_threshold: f32,
-}
-
-impl ChannelConfig {
-    /// The defaults for a front end: 0.5 chip offset, 15 Hz PLL, FLL assist 2 Hz for 300 ms
-    /// of pull-in then off (pure PLL), DLL 2 Hz then 0.5 Hz, 100 ms lock windows, 1 s C/N0 windows, code lock
-    /// above 26 dB-Hz, phase lock above cos 2Δφ = 0.5.
-    pub fn new(sample_rate_hz: f64, intermediate_frequency_hz: f64) -> Self {
-        Self {
-            sample_rate_hz,
-            intermediate_frequency_hz,
-            early_late_offset_chips: 0.5,
-            pull_in_ms: 300,
-            pll_bandwidth_hz: 15.0,
-            fll_pull_in_bandwidth_hz: 2.0,
-            fll_bandwidth_hz: 0.0,
-            dll_pull_in_bandwidth_hz: 2.0,
-            dll_bandwidth_hz: 0.5,
-            lock_window: 100,
-            cn0_window: 1000,
-            cn0_lock_threshold_dbhz: 26.0,
-            pld_threshold: 0.5,
-        }
-    }
-
-    fn correlator(&self) -> CorrelatorConfig {
-        CorrelatorConfig {
-            sample_rate_hz: self.sample_rate_hz,
-            intermediate_frequency_hz: self.intermediate_frequency_hz,
-            early_late_offset_chips: self.early_late_offset_chips,
-        }
-    }
-
-    fn validate(&self) -> Result<(), TrackingError> {
-        let v = [
-            self.pll_bandwidth_hz,
-            self.fll_pull_in_bandwidth_hz,
-            self.fll_bandwidth_hz,
-            self.dll_pull_in_bandwidth_hz,
-            self.dll_bandwidth_hz,
-            self.cn0_lock_threshold_dbhz,
-            self.pld_threshold,
-        ];
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(TrackingError::NonFinite);
-        }
-        let bw_ok = |b: f32| (0.0..=100.0).contains(&b);
-        if !(bw_ok(self.pll_bandwidth_hz)
-            && bw_ok(self.fll_pull_in_bandwidth_hz)
-            && bw_ok(self.fll_bandwidth_hz)
-            && bw_ok(self.dll_pull_in_bandwidth_hz)
-            && bw_ok(self.dll_bandwidth_hz))
-            || self.lock_window == 0
-            || self.cn0_window == 0
-        {
-            return Err(TrackingError::InvalidConfig);
-        }
-        Ok(())
-    }
-}
 
 /// Where a channel is in its life.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -182,6 +88,7 @@ pub struct TrackingEpoch<const A: usize> {
 
 /// One satellite's channel.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Channel<const A: usize> {
     config: ChannelConfig,
     correlator: Correlator<A>,
@@ -301,11 +208,17 @@ impl<const A: usize> Channel<A> {
         let doppler = f64::from(acq.doppler_hz);
         let dt = (now as i64).wrapping_sub(acq.first_sample as i64) as f64 / fs;
         let rate = CA_CHIP_RATE_HZ * (1.0 + doppler / GPS_L1_HZ);
-        self.correlator
-            .set_code_phase(f64::from(acq.code_phase_chips) + dt * rate)?;
-        self.correlator.set_code_rate(rate)?;
-        self.correlator
-            .set_carrier_frequency(self.config.intermediate_frequency_hz + doppler)?;
+        // On a copy: a refused setting leaves the channel unchanged.
+        let mut correlator = self.correlator.clone();
+        correlator.set_code_phase(f64::from(acq.code_phase_chips) + dt * rate)?;
+        correlator.set_code_rate(rate)?;
+        correlator.set_carrier_frequency(self.config.intermediate_frequency_hz + doppler)?;
+        self.correlator = correlator;
+        info!(
+            "channel: PRN {=u8} handed over at {=f32} Hz",
+            acq.prn.number(),
+            acq.doppler_hz
+        );
         self.carrier = CarrierLoop::new(acq.doppler_hz);
         self.acquired_doppler = acq.doppler_hz;
         self.index = 0;
@@ -448,45 +361,4 @@ impl<const A: usize> Channel<A> {
             .frequency_hz(self.config.sample_rate_hz)
             - self.config.intermediate_frequency_hz) as f32
     }
-}
-
-/// The residual Doppler `δ` (Hz, within ±[`REFINEMENT_RANGE_HZ`]) from squared prompts
-/// `Z_k²` of period `t`: the peak of `|Σ_k Z_k² e^{−j2π(2δ)kt}|` on a 1 Hz grid, refined by a
-/// parabola. Bounded: 501 candidates × 256 terms.
-pub fn refine_frequency(squares: &[[f32; 2]], t: f32) -> f32 {
-    let steps = (2.0 * REFINEMENT_RANGE_HZ) as usize + 1;
-    let mut best = (0.0f32, 0usize);
-    let mut around = [0.0f32; 3];
-    let mut previous = [0.0f32; 2];
-    for c in 0..steps {
-        let delta = c as f32 - REFINEMENT_RANGE_HZ;
-        let w = -core::f32::consts::TAU * 2.0 * delta * t;
-        let (ws, wc) = (libm::sinf(w), libm::cosf(w));
-        let (mut rr, mut ri) = (1.0f32, 0.0f32);
-        let (mut sr, mut si) = (0.0f32, 0.0f32);
-        for z in squares {
-            sr += z[0] * rr - z[1] * ri;
-            si += z[0] * ri + z[1] * rr;
-            let r = rr * wc - ri * ws;
-            ri = rr * ws + ri * wc;
-            rr = r;
-        }
-        let m = libm::sqrtf(sr * sr + si * si);
-        if m > best.0 {
-            best = (m, c);
-            around = [previous[1], m, 0.0];
-        }
-        if c == best.1 + 1 {
-            around[2] = m;
-        }
-        previous = [previous[1], m];
-    }
-    let [a, b, c] = around;
-    let curvature = 2.0 * b - a - c;
-    let offset = if curvature > 0.0 && best.1 > 0 && best.1 + 1 < steps {
-        (0.5 * (c - a) / curvature).clamp(-0.5, 0.5)
-    } else {
-        0.0
-    };
-    best.1 as f32 - REFINEMENT_RANGE_HZ + offset
 }

@@ -8,6 +8,7 @@ pub type Complex = [f32; 2];
 
 /// Twiddles and the bit-reversal permutation of an `N`-point FFT.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Fft<const N: usize> {
     twiddles: [Complex; N],
 }

@@ -12,9 +12,11 @@
 pub mod acquisition;
 pub mod channel;
 pub mod cn0;
+mod config;
 pub mod fft;
 pub mod lock;
 pub mod loops;
+mod refine;
 
 pub use acquisition::{Acquisition, AcquisitionConfig, SearchResult};
 pub use channel::{Channel, ChannelConfig, ChannelState, LockFlags, TrackingEpoch};

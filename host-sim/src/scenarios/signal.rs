@@ -19,7 +19,7 @@
 //! difference for two independent prompts at SNR = (C/N0)·T, computed exactly from the phase
 //! density of a noisy phasor, not the high-SNR approximation).
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 
 use anyhow::Result;
 use gnss_attitude::signal::{Prn, SampleFormat};
@@ -32,6 +32,7 @@ use serde_json::json;
 use super::{Outcome, RunContext, Scenario, Variant};
 use crate::chain::{self, ChainOutput, ChainParams};
 use crate::report::{plot_panels, progress, write_csv, Panel, Series};
+use crate::stats::phase_difference_rms_cycles;
 use crate::synth::file::{read_streams, write_streams};
 use crate::synth::quantize::encode;
 use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
@@ -131,35 +132,6 @@ pub fn params(cn0_dbhz: f64, seed: u64, duration_s: f64) -> ChainParams {
         duration_s,
         block: 260_000,
     }
-}
-
-/// Density of the phase error of a phasor in complex Gaussian noise at SNR `rho` (`A²/2σ²`).
-fn phase_density(theta: f64, rho: f64) -> f64 {
-    let c = theta.cos();
-    (-rho).exp() / TAU
-        + (rho.sqrt() * c / (2.0 * PI.sqrt()))
-            * (-rho * theta.sin().powi(2)).exp()
-            * (1.0 + libm::erf(rho.sqrt() * c))
-}
-
-/// RMS (cycles) of the wrapped difference of the phases of two independent prompts at
-/// `(C/N0)·T`: numerical circular convolution of the phase density of a noisy phasor on a 720-point grid.
-pub fn phase_difference_rms_cycles(cn0_dbhz: f64, t: f64) -> f64 {
-    let rho = 10f64.powf(cn0_dbhz / 10.0) * t;
-    const M: usize = 720;
-    let h = TAU / M as f64;
-    let p: Vec<f64> = (0..M)
-        .map(|k| phase_density(-PI + (k as f64 + 0.5) * h, rho) * h)
-        .collect();
-    let norm: f64 = p.iter().sum();
-    let mut second = 0.0;
-    for (j, pj) in p.iter().enumerate() {
-        for (k, pk) in p.iter().enumerate() {
-            let d = ((j as f64 - k as f64) * h + PI).rem_euclid(TAU) - PI;
-            second += pj * pk * d * d;
-        }
-    }
-    (second / (norm * norm)).sqrt() / TAU
 }
 
 fn wrap(x: f64) -> f64 {
