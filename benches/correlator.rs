@@ -41,6 +41,7 @@ fn bench(c: &mut Criterion) {
             sample_rate_hz: fs,
             intermediate_frequency_hz: if complex { 0.0 } else { fs / 4.0 },
             early_late_offset_chips: 0.5,
+            slave_taps: gnss_attitude::signal::SlaveTaps::All,
         };
         let ant: Vec<(Vec<i8>, Vec<i8>)> = (0..3)
             .map(|a| {

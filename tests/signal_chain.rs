@@ -312,6 +312,7 @@ fn correlator_equals_f64_reference_for_all_formats() {
             sample_rate_hz: fs,
             intermediate_frequency_hz: fif,
             early_late_offset_chips: 0.5,
+            slave_taps: gnss_attitude::signal::SlaveTaps::All,
         };
         let p = prn(7);
         let mut corr = Correlator::<3>::new(p, &cfg).unwrap();
@@ -405,6 +406,7 @@ fn accumulators_do_not_overflow_at_the_largest_epoch() {
         sample_rate_hz: fs,
         intermediate_frequency_hz: 0.0,
         early_late_offset_chips: 0.5,
+        slave_taps: gnss_attitude::signal::SlaveTaps::All,
     };
     let p = prn(3);
     let mut corr = Correlator::<1>::new(p, &cfg).unwrap();
@@ -748,4 +750,58 @@ fn phase_difference_bound_matches_its_high_snr_limit() {
         approx(55.0)
     );
     assert!(phase_difference_rms_cycles(35.0, 1e-3) > 1.1 * approx(35.0));
+}
+
+/// Prompt-only slaves: the reference antenna's taps and every prompt are those of the full
+/// correlator, the slaves' other taps are zero.
+#[test]
+fn prompt_only_slaves_keep_the_prompts() {
+    use gnss_attitude::signal::SlaveTaps;
+    for (format, fs, fif) in [
+        (SampleFormat::Cs8, 2.6e6, 0.0),
+        (SampleFormat::Int8, 4.092e6, 1.0e6),
+    ] {
+        let n = 2 * (fs / 1000.0) as usize;
+        let ants: Vec<(Vec<i8>, Vec<i8>)> = (0..3)
+            .map(|a| synth_samples(format, fs, fif, n, 99 + a))
+            .collect();
+        let block = if format.is_complex() {
+            SampleBlock::complex(
+                0,
+                [&ants[0].0[..], &ants[1].0[..], &ants[2].0[..]],
+                [&ants[0].1[..], &ants[1].1[..], &ants[2].1[..]],
+            )
+            .unwrap()
+        } else {
+            SampleBlock::real(0, [&ants[0].0[..], &ants[1].0[..], &ants[2].0[..]]).unwrap()
+        };
+        let mut outs = Vec::new();
+        for taps in [SlaveTaps::All, SlaveTaps::Prompt] {
+            let cfg = CorrelatorConfig {
+                sample_rate_hz: fs,
+                intermediate_frequency_hz: fif,
+                early_late_offset_chips: 0.5,
+                slave_taps: taps,
+            };
+            let mut c = Correlator::<3>::new(prn(7), &cfg).unwrap();
+            c.set_carrier_frequency(fif + 1234.5).unwrap();
+            c.set_code_phase(100.3).unwrap();
+            let mut cursor = 0;
+            let mut last = None;
+            while cursor < n {
+                if let Some(e) = c.run(&block, &mut cursor).unwrap() {
+                    last = Some(e);
+                }
+            }
+            outs.push(last.unwrap());
+        }
+        let (all, prompt) = (&outs[0], &outs[1]);
+        assert_eq!(all.taps[0], prompt.taps[0]);
+        for a in 1..3 {
+            assert_eq!(all.taps[a].prompt, prompt.taps[a].prompt);
+            assert_eq!(prompt.taps[a].early, Default::default());
+            assert_eq!(prompt.taps[a].noise, Default::default());
+            assert_ne!(all.taps[a].early, Default::default());
+        }
+    }
 }

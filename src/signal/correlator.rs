@@ -46,7 +46,9 @@
 
 use super::block::SampleBlock;
 use super::ca_code::{Prn, CA_CHIP_RATE_HZ, QUIET_OFFSET_CHIPS};
-use super::kernels::{correlate_antenna, fill_carrier, fill_code, Replica, Scratch};
+use super::kernels::{
+    correlate_antenna, correlate_prompt, fill_carrier, fill_code, Replica, Scratch,
+};
 use super::nco::{CarrierNco, CodeNco, CODE_WRAP};
 use crate::error::SignalError;
 
@@ -133,6 +135,18 @@ pub struct EpochCorrelations<const A: usize> {
     pub complete: bool,
 }
 
+/// Which taps the slaved antennas (index 1 and up) compute.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SlaveTaps {
+    /// Early, prompt, late and noise on every antenna.
+    #[default]
+    All,
+    /// Prompt only on the slaved antennas (their other taps read 0). Paper 003's filter needs
+    /// only the slaved antennas' prompts; this more than halves their cost on the target.
+    Prompt,
+}
+
 /// Configuration of a correlator (front end and tap placement).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -145,6 +159,8 @@ pub struct CorrelatorConfig {
     /// Offset of the early and late taps from prompt, chips (half the early-late spacing);
     /// realized as the nearest whole number of samples (at least one).
     pub early_late_offset_chips: f32,
+    /// Taps of the slaved antennas.
+    pub slave_taps: SlaveTaps,
 }
 
 impl CorrelatorConfig {
@@ -198,6 +214,7 @@ pub struct Correlator<const A: usize> {
     carrier_total: i64,
     code: CodeNco,
     offset: usize,
+    slave_taps: SlaveTaps,
     noise_delay: u64,
     acc: [[i32; 8]; A],
     samples: u32,
@@ -231,6 +248,7 @@ impl<const A: usize> Correlator<A> {
                 step: CodeNco::step_for(CA_CHIP_RATE_HZ, config.sample_rate_hz),
             },
             offset: config.early_late_offset_samples(),
+            slave_taps: config.slave_taps,
             noise_delay,
             acc: [[0; 8]; A],
             samples: 0,
@@ -448,7 +466,11 @@ impl<const A: usize> Correlator<A> {
                 let Some((i, q)) = block.span(a, start + done, m) else {
                     continue;
                 };
-                let part = correlate_antenna(i, q, &replica, &mut scratch);
+                let part = if a > 0 && self.slave_taps == SlaveTaps::Prompt {
+                    correlate_prompt(i, q, &replica)
+                } else {
+                    correlate_antenna(i, q, &replica, &mut scratch)
+                };
                 for (x, p) in acc.iter_mut().zip(part.iter()) {
                     *x = x.wrapping_add(*p);
                 }

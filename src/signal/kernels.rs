@@ -114,6 +114,31 @@ pub(crate) fn correlate_antenna(
     }
 }
 
+/// Prompt only (slaved antennas): `[0, 0, P_I, P_Q, 0, 0, 0, 0]`, one fused pass (few
+/// registers on every target).
+#[inline]
+pub(crate) fn correlate_prompt(xi: &[i8], xq: Option<&[i8]>, r: &Replica<'_>) -> [i32; 8] {
+    let (mut pi, mut pq) = (0i32, 0i32);
+    match xq {
+        Some(xq) => {
+            for ((((&i, &q), &c), &s), &p) in xi.iter().zip(xq).zip(r.cos).zip(r.sin).zip(r.prompt)
+            {
+                let (i, q) = (i16::from(i), i16::from(q));
+                pi += i32::from(i * c + q * s) * i32::from(p);
+                pq += i32::from(q * c - i * s) * i32::from(p);
+            }
+        }
+        None => {
+            for (((&i, &c), &s), &p) in xi.iter().zip(r.cos).zip(r.sin).zip(r.prompt) {
+                let i = i16::from(i);
+                pi += i32::from(i * c) * i32::from(p);
+                pq += i32::from(-i * s) * i32::from(p);
+            }
+        }
+    }
+    [0, 0, pi, pq, 0, 0, 0, 0]
+}
+
 /// Fused pass, complex samples: `m = x · (c − js)`, then the four taps.
 #[cfg(not(target_arch = "arm"))]
 #[inline]

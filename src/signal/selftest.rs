@@ -41,6 +41,7 @@ pub fn run_correlator_self_test(
         sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
         intermediate_frequency_hz: 0.0,
         early_late_offset_chips: 0.5,
+        slave_taps: crate::signal::SlaveTaps::All,
     };
     let prn = Prn::new(5).ok_or(SignalError::InvalidConfig)?;
     let mut correlator = Correlator::<3>::new(prn, &config)?;

@@ -1,7 +1,7 @@
 //! Configuration of a tracking channel.
 
 use crate::error::TrackingError;
-use crate::signal::correlator::CorrelatorConfig;
+use crate::signal::correlator::{CorrelatorConfig, SlaveTaps};
 
 /// Configuration of a channel (front end and loop parameters).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -13,6 +13,8 @@ pub struct ChannelConfig {
     pub intermediate_frequency_hz: f64,
     /// Early/late offset from prompt, chips.
     pub early_late_offset_chips: f32,
+    /// Taps of the slaved antennas (all four by default).
+    pub slave_taps: SlaveTaps,
     /// Duration of the pull-in schedule after hand-over, ms.
     pub pull_in_ms: u32,
     /// PLL noise bandwidth, Hz.
@@ -44,6 +46,7 @@ impl ChannelConfig {
             sample_rate_hz,
             intermediate_frequency_hz,
             early_late_offset_chips: 0.5,
+            slave_taps: SlaveTaps::All,
             pull_in_ms: 300,
             pll_bandwidth_hz: 15.0,
             fll_pull_in_bandwidth_hz: 2.0,
@@ -62,6 +65,7 @@ impl ChannelConfig {
             sample_rate_hz: self.sample_rate_hz,
             intermediate_frequency_hz: self.intermediate_frequency_hz,
             early_late_offset_chips: self.early_late_offset_chips,
+            slave_taps: self.slave_taps,
         }
     }
 

@@ -94,11 +94,30 @@ fn signal_budgets() {
     let _ = measure("correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex i8, E/P/L+N (2600 samples)", || {
         run_correlator_self_test(black_box(i), black_box(q)).is_ok()
     });
+    // Prompt-only slaves (what paper 003's filter needs): E/P/L+N on the reference antenna,
+    // P on the other two.
+    let cfg_p = CorrelatorConfig {
+        sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
+        intermediate_frequency_hz: 0.0,
+        early_late_offset_chips: 0.5,
+        slave_taps: gnss_attitude::signal::SlaveTaps::Prompt,
+    };
+    if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::complex(0, i, q)) {
+        if let Ok(mut corr) = Correlator::<3>::new(prn, &cfg_p) {
+            let _ = corr.set_carrier_frequency(2345.0);
+            let _ = corr.set_code_phase(0.0);
+            let _ = measure("correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex, E/P/L+N ref + P slaves", || {
+                let mut cursor = 0;
+                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+            });
+        }
+    }
     // The same on real IF samples (2-bit-style front ends).
     let cfg = CorrelatorConfig {
         sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
         intermediate_frequency_hz: 650_000.0,
         early_late_offset_chips: 0.5,
+        slave_taps: gnss_attitude::signal::SlaveTaps::All,
     };
     if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::real(0, i)) {
         if let Ok(mut corr) = Correlator::<3>::new(prn, &cfg) {

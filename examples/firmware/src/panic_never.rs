@@ -60,6 +60,7 @@ fn signal_chain() {
         sample_rate_hz: black_box(2.6e6),
         intermediate_frequency_hz: black_box(0.0),
         early_late_offset_chips: black_box(0.5),
+        slave_taps: black_box(gnss_attitude::signal::SlaveTaps::Prompt),
     };
     let prn = match Prn::new(black_box(5)) {
         Some(p) => p,
