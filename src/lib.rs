@@ -33,11 +33,13 @@
 //!
 //! | Module | What it is |
 //! |---|---|
+//! | [`signal`] | GPS L1 C/A codes, front-end sample formats, NCOs, the fixed-point three-antenna correlator |
+//! | [`tracking`] | Acquisition, tracking loops, C/N0, lock detectors, the per-satellite channel |
+//! | [`frontend`] | SPI driver of the NT1065 four-channel front end (embedded-hal 1.0) |
 //! | [`geometry`] | Frames, rotation matrices, Hamilton quaternions, Euler angles of the papers |
 //! | [`ekf`] | The fixed-size Kalman filter toolkit every estimator shares |
-//! | [`attitude`] | Attitude estimators: snapshot from carrier phase with ambiguity resolution (paper 002); direction-cosine, multi-structure and rigid-body filters (paper 000) |
+//! | [`attitude`] | Attitude estimators: snapshot from carrier phase with ambiguity resolution (paper 002); one-stage filter from three-antenna I/Q (paper 003); direction-cosine, multi-structure and rigid-body filters from baselines and Doppler (paper 000) |
 //! | [`gyro`] | Gyro propagation and in-flight calibration against a reference attitude (paper 001) |
-//! | [`attitude`] | The attitude estimators (paper 003's one-stage filter, ...) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
@@ -74,17 +76,21 @@ mod log;
 pub mod attitude;
 pub mod ekf;
 pub mod error;
+pub mod frontend;
 pub mod geometry;
 pub mod gyro;
 pub mod noise;
 pub mod selftest;
+pub mod signal;
+pub mod tracking;
 
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
 pub use error::{
-    AmbiguityError, CalibrationError, DcmError, ErrorKind, FilterError, GeometryError,
-    OneStageError, SnapshotError,
+    AcquisitionError, AmbiguityError, CalibrationError, DcmError, ErrorKind, FilterError,
+    FrontEndError, GeometryError, OneStageError, SampleError, SignalError, SnapshotError,
+    TrackingError,
 };
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the

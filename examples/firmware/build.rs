@@ -21,5 +21,25 @@ fn main() {
          const EXPECTED: SelfTestReport = SelfTestReport {{ state: {:?}, truth: {:?}, covariance_trace: {:?}, mean_nis: {:?}, mean_nees: {:?}, accepted: {} }};\n",
         r.state, r.truth, r.covariance_trace, r.mean_nis, r.mean_nees, r.accepted
     );
+    // The correlator is integer-only: the target must reproduce the host's taps exactly.
+    use gnss_attitude::signal::selftest::{run_correlator_self_test, signal_self_test_samples};
+    let s: Vec<_> = (1..=6u32).map(signal_self_test_samples).collect();
+    let e = run_correlator_self_test([&s[0], &s[1], &s[2]], [&s[3], &s[4], &s[5]])
+        .expect("host correlator self-test runs")
+        .expect("one code period");
+    let mut taps = Vec::new();
+    for t in e.taps.iter() {
+        let mut row = [t.early.i, t.early.q, t.prompt.i, t.prompt.q, t.late.i, t.late.q, t.noise.i, t.noise.q];
+        if env::var_os("CARGO_FEATURE_WRONG_EXPECTED").is_some() {
+            row[2] += 1;
+        }
+        taps.push(format!("{row:?}"));
+    }
+    let expected = format!(
+        "{expected}/// The correlator self-test's taps per antenna (E I/Q, P I/Q, L I/Q, N I/Q), host.\n\
+         const EXPECTED_TAPS: [[i32; 8]; 3] = [{}];\n/// Samples integrated on the host.\nconst EXPECTED_SAMPLES: u32 = {};\n",
+        taps.join(", "),
+        e.samples
+    );
     fs::write(out.join("expected.rs"), expected).expect("write expected.rs");
 }

@@ -5,12 +5,16 @@
 //! result against the truth, against the theoretical bound for the same data, and against the
 //! figures printed in the source papers.
 //!
+//! * [`chain`]: the core's signal chain (acquisition, tracking) run on synthesized samples.
 //! * [`scenarios`]: one module per experiment, registered in [`scenarios::SCENARIOS`].
 //! * [`truth`]: the f64 truth models (attitude kinematics, ...).
 //! * [`report`]: JSON summary, CSV time series, PNG plots, progress bars.
 //! * [`stats`]: small statistics helpers (RMS, percentiles, χ² intervals).
+//! * [`synth`]: the coherent three-antenna GPS L1 C/A sample synthesizer.
 
+pub mod chain;
 pub mod report;
 pub mod scenarios;
 pub mod stats;
+pub mod synth;
 pub mod truth;

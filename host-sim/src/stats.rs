@@ -1,5 +1,7 @@
 //! Small statistics helpers shared by the scenarios.
 
+use std::f64::consts::{PI, TAU};
+
 /// Root mean square; 0 for an empty slice.
 pub fn rms(values: &[f64]) -> f64 {
     if values.is_empty() {
@@ -102,6 +104,35 @@ pub fn normal_quantile(p: f64) -> f64 {
         (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
             / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
     }
+}
+
+/// Density of the phase error of a phasor in complex Gaussian noise at SNR `rho` (`A²/2σ²`).
+fn phase_density(theta: f64, rho: f64) -> f64 {
+    let c = theta.cos();
+    (-rho).exp() / TAU
+        + (rho.sqrt() * c / (2.0 * PI.sqrt()))
+            * (-rho * theta.sin().powi(2)).exp()
+            * (1.0 + libm::erf(rho.sqrt() * c))
+}
+
+/// RMS (cycles) of the wrapped difference of the phases of two independent prompts at
+/// `(C/N0)·T`: numerical circular convolution of the phase density of a noisy phasor on a 720-point grid.
+pub fn phase_difference_rms_cycles(cn0_dbhz: f64, t: f64) -> f64 {
+    let rho = 10f64.powf(cn0_dbhz / 10.0) * t;
+    const M: usize = 720;
+    let h = TAU / M as f64;
+    let p: Vec<f64> = (0..M)
+        .map(|k| phase_density(-PI + (k as f64 + 0.5) * h, rho) * h)
+        .collect();
+    let norm: f64 = p.iter().sum();
+    let mut second = 0.0;
+    for (j, pj) in p.iter().enumerate() {
+        for (k, pk) in p.iter().enumerate() {
+            let d = ((j as f64 - k as f64) * h + PI).rem_euclid(TAU) - PI;
+            second += pj * pk * d * d;
+        }
+    }
+    (second / (norm * norm)).sqrt() / TAU
 }
 
 #[cfg(test)]

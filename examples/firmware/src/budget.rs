@@ -24,7 +24,23 @@ use gnss_attitude::attitude::one_stage::{
     PromptIq, SatelliteObservation, MAX_SATELLITES,
 };
 use gnss_attitude::geometry::Paper003Angles;
+use gnss_attitude::signal::selftest::{
+    run_correlator_self_test, signal_self_test_samples, SIGNAL_SELF_TEST_LEN, SIGNAL_SELF_TEST_RATE_HZ,
+};
+use gnss_attitude::signal::{Correlator, CorrelatorConfig, Prn, SampleBlock};
+use gnss_attitude::tracking::{Acquisition, AcquisitionConfig, Channel, ChannelConfig, SearchResult};
 use nalgebra::{ComplexField, Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
+
+/// Six sample streams (I and Q of three antennas), one code period at 2.6 Msps, built at
+/// compile time into flash.
+pub static SIGNAL_SAMPLES: [[i8; SIGNAL_SELF_TEST_LEN]; 6] = [
+    signal_self_test_samples(1),
+    signal_self_test_samples(2),
+    signal_self_test_samples(3),
+    signal_self_test_samples(4),
+    signal_self_test_samples(5),
+    signal_self_test_samples(6),
+];
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -89,6 +105,7 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
 /// Every budget of the firmware, in region order.
 pub fn run_all() {
     ekf_budgets();
+    signal_budgets();
     snapshot_budgets();
     dcm_budgets();
     gyro_budgets();
@@ -383,4 +400,85 @@ fn one_stage_budget<const N: usize>(
         let _ = filter.step(epoch);
     }
     let _ = measure(name, || black_box(&mut filter).step(black_box(epoch)).is_ok());
+}
+
+fn signal_budgets() {
+    let s = &SIGNAL_SAMPLES;
+    let i = [&s[0][..], &s[1][..], &s[2][..]];
+    let q = [&s[3][..], &s[4][..], &s[5][..]];
+    // One 1 ms code period (2600 samples) of the 3-antenna correlator, E/P/L + noise taps.
+    let _ = measure("correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex i8, E/P/L+N (2600 samples)", || {
+        run_correlator_self_test(black_box(i), black_box(q)).is_ok()
+    });
+    // Prompt-only slaves (what paper 003's filter needs): E/P/L+N on the reference antenna,
+    // P on the other two.
+    let cfg_p = CorrelatorConfig {
+        sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
+        intermediate_frequency_hz: 0.0,
+        early_late_offset_chips: 0.5,
+        slave_taps: gnss_attitude::signal::SlaveTaps::Prompt,
+    };
+    if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::complex(0, i, q)) {
+        if let Ok(mut corr) = Correlator::<3>::new(prn, &cfg_p) {
+            let _ = corr.set_carrier_frequency(2345.0);
+            let _ = corr.set_code_phase(0.0);
+            let _ = measure("correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex, E/P/L+N ref + P slaves", || {
+                let mut cursor = 0;
+                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+            });
+        }
+    }
+    // The same on real IF samples (2-bit-style front ends).
+    let cfg = CorrelatorConfig {
+        sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
+        intermediate_frequency_hz: 650_000.0,
+        early_late_offset_chips: 0.5,
+        slave_taps: gnss_attitude::signal::SlaveTaps::All,
+    };
+    if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::real(0, i)) {
+        if let Ok(mut corr) = Correlator::<3>::new(prn, &cfg) {
+            let _ = corr.set_code_phase(0.0);
+            let _ = measure("correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF, E/P/L+N (2600 samples)", || {
+                let mut cursor = 0;
+                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+            });
+        }
+    }
+    // One tracking epoch: correlator + discriminators + loop filters + lock/C/N0 windows.
+    let ch_cfg = ChannelConfig::new(SIGNAL_SELF_TEST_RATE_HZ, 0.0);
+    if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::complex(0, i, q)) {
+        if let Ok(mut ch) = Channel::<3>::new(prn, &ch_cfg) {
+            let acq = SearchResult {
+                prn,
+                detected: true,
+                metric: 10.0,
+                threshold: 2.0,
+                doppler_hz: 2345.0,
+                code_phase_chips: 1022.9,
+                first_sample: 0,
+            };
+            let mut cursor = 0;
+            if ch.start(&acq).is_ok() {
+                // The hand-over's partial period (a sample or so), then one full period.
+                let _ = ch.process(&block, &mut cursor);
+                let _ = measure("tracking channel: 1 epoch (correlator + loops), 3 antennas, 2.6 Msps", || {
+                    black_box(&mut ch).process(black_box(&block), &mut cursor).is_ok()
+                });
+            }
+        }
+    }
+    // Acquisition: one Doppler bin x one millisecond, N = 1024 (the target's size).
+    if let (Ok(mut acq), Some(prn)) = (Acquisition::<1024>::new(), Prn::new(5)) {
+        let cfg = AcquisitionConfig {
+            sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
+            intermediate_frequency_hz: 0.0,
+            doppler_max_hz: 0.0,
+            doppler_step_hz: 500.0,
+            noncoherent_ms: 1,
+            false_alarm_probability: 1e-3,
+        };
+        let _ = measure("acquisition N=1024: 1 PRN x 1 Doppler bin x 1 ms (mix, 2 FFTs, threshold)", || {
+            black_box(&mut acq).search(prn, black_box(&s[0][..]), Some(black_box(&s[3][..])), 0, &cfg).is_ok()
+        });
+    }
 }

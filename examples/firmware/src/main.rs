@@ -59,6 +59,8 @@ fn main() -> ! {
         }
     }
 
+    all_passed &= signal_self_check();
+
     budget::run_all();
 
     if all_passed {
@@ -70,6 +72,33 @@ fn main() -> ! {
     }
     loop {
         cortex_m::asm::nop();
+    }
+}
+
+/// The correlator on the target against the host's integers (must be equal).
+fn signal_self_check() -> bool {
+    use gnss_attitude::signal::selftest::run_correlator_self_test;
+    let s = &budget::SIGNAL_SAMPLES;
+    match run_correlator_self_test([&s[0], &s[1], &s[2]], [&s[3], &s[4], &s[5]]) {
+        Ok(Some(e)) => {
+            let mut equal = e.samples == EXPECTED_SAMPLES;
+            for (t, x) in e.taps.iter().zip(EXPECTED_TAPS.iter()) {
+                let row = [t.early.i, t.early.q, t.prompt.i, t.prompt.q, t.late.i, t.late.q, t.noise.i, t.noise.q];
+                equal &= row == *x;
+            }
+            hprintln!(
+                "selfcheck correlator: {} ({} samples, 3 antennas x 4 taps bit-exact vs host; prompt I/Q of antenna 0: {} {})",
+                if equal { "PASS" } else { "FAIL" },
+                e.samples,
+                e.taps[0].prompt.i,
+                e.taps[0].prompt.q
+            );
+            equal
+        }
+        other => {
+            hprintln!("selfcheck correlator: FAIL {:?}", other.map(|o| o.is_some()));
+            false
+        }
     }
 }
 

@@ -27,6 +27,11 @@ use gnss_attitude::attitude::one_stage::{
     satellite_terms, AntennaArray as OneStageArray, BesselRatio, FilterMode, OneStageConfig, OneStageFilter, Prior,
     SatelliteObservation, MAX_SATELLITES,
 };
+use gnss_attitude::frontend::nt1065::{Nt1065, Nt1065Config};
+use gnss_attitude::signal::{Correlator, CorrelatorConfig, Prn, SampleBlock, SampleFormat};
+use gnss_attitude::tracking::acquisition::detection_threshold;
+use gnss_attitude::tracking::channel::refine_frequency;
+use gnss_attitude::tracking::{Acquisition, AcquisitionConfig, Channel, ChannelConfig, SearchResult};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 extern "C" {
@@ -63,6 +68,7 @@ fn main() -> ! {
     dcm_entry_points();
     gyro();
     one_stage();
+    signal_chain();
     loop {
         cortex_m::asm::nop();
     }
@@ -244,6 +250,100 @@ fn one_stage() {
         let _ = black_box(f.step(epoch));
         let _ = black_box(f.angles());
     }
+}
+
+
+
+/// An SPI device whose bus does nothing (the driver's code paths are what is checked).
+struct OpaqueSpi;
+
+impl embedded_hal::spi::ErrorType for OpaqueSpi {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::spi::SpiDevice for OpaqueSpi {
+    fn transaction(&mut self, operations: &mut [embedded_hal::spi::Operation<'_, u8>]) -> Result<(), Self::Error> {
+        for op in operations.iter_mut() {
+            if let embedded_hal::spi::Operation::TransferInPlace(b) = op {
+                for x in b.iter_mut() {
+                    *x = black_box(*x);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+struct NoDelay;
+
+impl embedded_hal::delay::DelayNs for NoDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        black_box(ns);
+    }
+}
+
+/// The signal chain's entry points with opaque inputs.
+fn signal_chain() {
+    let raw: [u8; 64] = black_box([0u8; 64]);
+    let mut i = [0i8; 32];
+    let mut q = [0i8; 32];
+    let _ = black_box(black_box(SampleFormat::Cs8).decode(&raw, black_box(0), &mut i, &mut q));
+    let _ = black_box(black_box(SampleFormat::MultiChannel2 { channels: 3 }).decode(&raw, black_box(2), &mut i, &mut q));
+    let cfg = CorrelatorConfig {
+        sample_rate_hz: black_box(2.6e6),
+        intermediate_frequency_hz: black_box(0.0),
+        early_late_offset_chips: black_box(0.5),
+        slave_taps: black_box(gnss_attitude::signal::SlaveTaps::Prompt),
+    };
+    let prn = match Prn::new(black_box(5)) {
+        Some(p) => p,
+        None => return,
+    };
+    let si: [i8; 256] = black_box([1; 256]);
+    let sq: [i8; 256] = black_box([1; 256]);
+    if let Ok(block) = SampleBlock::complex(black_box(0), [&si[..], &si[..], &si[..]], [&sq[..], &sq[..], &sq[..]]) {
+        if let Ok(mut c) = Correlator::<3>::new(prn, &cfg) {
+            let _ = c.set_carrier_frequency(black_box(1000.0));
+            let _ = c.set_code_rate(black_box(1.023e6));
+            let _ = c.set_code_phase(black_box(3.0));
+            let _ = c.set_carrier_phase(black_box(0.1));
+            let mut cursor = black_box(0);
+            let _ = black_box(c.run(&block, &mut cursor));
+        }
+        let ch_cfg = ChannelConfig::new(black_box(2.6e6), black_box(0.0));
+        if let Ok(mut ch) = Channel::<3>::new(prn, &ch_cfg) {
+            let acq = SearchResult {
+                prn,
+                detected: true,
+                metric: black_box(5.0),
+                threshold: black_box(2.0),
+                doppler_hz: black_box(100.0),
+                code_phase_chips: black_box(10.0),
+                first_sample: black_box(0),
+            };
+            let _ = ch.start(&acq);
+            let mut cursor = black_box(0);
+            let _ = black_box(ch.process(&block, &mut cursor));
+        }
+    }
+    if let Ok(mut a) = Acquisition::<1024>::new() {
+        let cfg = AcquisitionConfig {
+            sample_rate_hz: black_box(2.6e6),
+            intermediate_frequency_hz: black_box(0.0),
+            doppler_max_hz: black_box(0.0),
+            doppler_step_hz: black_box(500.0),
+            noncoherent_ms: black_box(1),
+            false_alarm_probability: black_box(1e-3),
+        };
+        let _ = black_box(a.search(prn, &si, Some(&sq), black_box(0), &cfg));
+    }
+    let squares: [[f32; 2]; 8] = black_box([[1.0, 0.0]; 8]);
+    let _ = black_box(refine_frequency(&squares, black_box(1e-3)));
+    let _ = black_box(detection_threshold(black_box(10), black_box(1e5), black_box(1e-3)));
+    let mut fe = Nt1065::new(OpaqueSpi);
+    let _ = black_box(fe.configure(&black_box(Nt1065Config::three_antenna_l1())));
+    let _ = black_box(fe.wait_ready(&mut NoDelay, black_box(10)));
+    let _ = black_box(fe.read_register(black_box(44)));
 }
 
 #[panic_handler]

@@ -16,6 +16,7 @@ pub mod dcm;
 pub mod gyro_cal;
 pub mod gyro_cal_gnss;
 pub mod one_stage;
+pub mod signal;
 pub mod snapshot;
 pub mod vector_ekf;
 
@@ -25,6 +26,7 @@ pub const SCENARIOS: &[Scenario] = &[
     snapshot::SCENARIO,
     dcm::SCENARIO,
     gyro_cal::SCENARIO,
+    signal::SCENARIO,
     one_stage::SCENARIO,
 ];
 

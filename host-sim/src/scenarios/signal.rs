@@ -1,0 +1,419 @@
+//! `signal`: the fixed-point three-antenna GPS L1 C/A signal chain on synthesized samples.
+//!
+//! Scene: eight satellites in paper 003's geometry G1 (azimuth 45°·(i−1), elevation 10°·i),
+//! all at the variant's C/N0, Dopplers within ±4.5 kHz and Doppler rates within ±0.8 Hz/s,
+//! 50 bit/s data; paper 003's array (equilateral triangle, side 1.5 m, origin at the middle of
+//! AB) turning about the body Y axis at 0.01 rad/s; line biases 0, 0.13, −0.27 cycle; complex
+//! CS8 samples at 2.6 Msps (noise σ = 16 LSB). The chain: acquisition of all 32 PRNs on the
+//! reference antenna (40 ms, ±10 kHz in 500 Hz bins, P_fa = 10⁻⁵ per PRN), then tracking of
+//! the detected ones for 61 s (so that lock can be held for 60 s after pull-in).
+//!
+//! Metrics: `prn_chips_ok` (core codes matching IS-GPS-200's first 10 chips, of 32),
+//! `acq_found` / `acq_missed` / `acq_false` (over the visible satellites; false = a detected
+//! PRN that is not in the scene), `doppler_err_hz_max` and `code_err_chips_max` (acquisition
+//! against the truth), `lock_held_s` (minimum over satellites of the longest stretch with
+//! code and phase lock), `cn0_err_db_max` (every 1 s C/N0 report from 2 s on, against the
+//! synthesized C/N0), `phase_diff_err_rms_cycles` (the carrier-phase differences of antennas
+//! B and C against A from the prompts, `arg(P_X P_A*)`, against the synthesized geometry and
+//! line biases, from 2 s on) and `phase_diff_bound_cycles` (the theoretical RMS of that
+//! difference for two independent prompts at SNR = (C/N0)·T, computed exactly from the phase
+//! density of a noisy phasor, not the high-SNR approximation).
+
+use std::f64::consts::TAU;
+
+use anyhow::Result;
+use gnss_attitude::signal::{Prn, SampleFormat};
+use gnss_attitude::tracking::{AcquisitionConfig, ChannelConfig};
+use nalgebra::{Matrix3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::json;
+
+use super::{Outcome, RunContext, Scenario, Variant};
+use crate::chain::{self, ChainOutput, ChainParams};
+use crate::report::{plot_panels, progress, write_csv, Panel, Series};
+use crate::stats::phase_difference_rms_cycles;
+use crate::synth::file::{read_streams, write_streams};
+use crate::synth::quantize::encode;
+use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
+
+/// The scenario.
+pub const SCENARIO: Scenario = Scenario {
+    name: "signal",
+    about: "fixed-point 3-antenna GPS L1 C/A chain on synthesized samples: acquisition, 60 s tracking, C/N0, phase differences",
+    variants: &[
+        Variant { name: "40dbhz", about: "8 satellites at 40 dB-Hz" },
+        Variant { name: "35dbhz", about: "8 satellites at 35 dB-Hz" },
+        Variant { name: "45dbhz", about: "8 satellites at 45 dB-Hz" },
+    ],
+    run,
+};
+
+/// Sample rate, Hz.
+pub const SAMPLE_RATE_HZ: f64 = 2.6e6;
+/// Tracking duration, s.
+pub const DURATION_S: f64 = 61.0;
+/// PRNs of the eight satellites.
+pub const PRNS: [u8; 8] = [2, 5, 9, 12, 17, 21, 25, 30];
+/// IS-GPS-200 Table 3-Ia, first 10 chips (octal), PRN 1–32.
+pub const FIRST_TEN_CHIPS_OCTAL: [u16; 32] = [
+    0o1440, 0o1620, 0o1710, 0o1744, 0o1133, 0o1455, 0o1131, 0o1454, 0o1626, 0o1504, 0o1642, 0o1750,
+    0o1764, 0o1772, 0o1775, 0o1776, 0o1156, 0o1467, 0o1633, 0o1715, 0o1746, 0o1763, 0o1063, 0o1706,
+    0o1743, 0o1761, 0o1770, 0o1774, 0o1127, 0o1453, 0o1625, 0o1712,
+];
+
+/// Paper 003's array: equilateral triangle of side `l`, origin at the middle of AB, X to B,
+/// Y to C (body frame, m).
+pub fn triangle(l: f64) -> Vec<Vector3<f64>> {
+    vec![
+        Vector3::new(-l / 2.0, 0.0, 0.0),
+        Vector3::new(l / 2.0, 0.0, 0.0),
+        Vector3::new(0.0, l * 3f64.sqrt() / 2.0, 0.0),
+    ]
+}
+
+/// The scene of the scenario at `cn0_dbhz`.
+pub fn scene(cn0_dbhz: f64, seed: u64) -> Scene {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let satellites = PRNS
+        .iter()
+        .enumerate()
+        .map(|(k, &prn)| {
+            let az = (45.0 * k as f64).to_radians();
+            let el = (10.0 * (k + 1) as f64).to_radians();
+            Satellite {
+                prn,
+                cn0_dbhz,
+                doppler_hz: rng.random_range(-4500.0..4500.0),
+                doppler_rate_hz_s: rng.random_range(-0.8..0.8),
+                code_phase_chips: rng.random_range(0.0..1023.0),
+                carrier_phase_cycles: rng.random_range(0.0..1.0),
+                // Local frame: x north, y east, z up.
+                los_ref: Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin()),
+                data_seed: Some(seed.wrapping_mul(31).wrapping_add(k as u64)),
+            }
+        })
+        .collect();
+    Scene {
+        satellites,
+        antennas_b: triangle(1.5),
+        line_bias_cycles: vec![0.0, 0.13, -0.27],
+        attitude: AttitudeMotion::ConstantRate {
+            c_rb0: Matrix3::identity(),
+            omega_b: Vector3::new(0.0, 0.01, 0.0),
+        },
+        front_end: FrontEnd {
+            sample_rate_hz: SAMPLE_RATE_HZ,
+            intermediate_frequency_hz: 0.0,
+            complex: true,
+        },
+        noise_seed: Some(seed ^ 0x005e_ed0f_5167),
+    }
+}
+
+/// The chain set-up of the scenario.
+pub fn params(cn0_dbhz: f64, seed: u64, duration_s: f64) -> ChainParams {
+    ChainParams {
+        scene: scene(cn0_dbhz, seed),
+        format: SampleFormat::Cs8,
+        acquisition: AcquisitionConfig {
+            sample_rate_hz: SAMPLE_RATE_HZ,
+            intermediate_frequency_hz: 0.0,
+            doppler_max_hz: 10_000.0,
+            doppler_step_hz: 500.0,
+            noncoherent_ms: 40,
+            // The threshold's Gamma model holds for noise only; the cross-correlation of eight
+            // 45 dB-Hz satellites fattens the tail (at 10⁻³ one absent PRN crossed it), so
+            // the scenario asks for 10⁻⁵ (threshold 2.35 instead of 2.15).
+            false_alarm_probability: 1e-5,
+        },
+        search_prns: (1..=32).collect(),
+        channel: ChannelConfig::new(SAMPLE_RATE_HZ, 0.0),
+        duration_s,
+        block: 32_768,
+    }
+}
+
+fn wrap(x: f64) -> f64 {
+    x - x.round()
+}
+
+fn run(ctx: &RunContext) -> Result<Outcome> {
+    let cn0 = match ctx.variant.as_str() {
+        "35dbhz" => 35.0,
+        "45dbhz" => 45.0,
+        _ => 40.0,
+    };
+    let params = params(cn0, ctx.seed, DURATION_S);
+    let bar = progress(1000, "signal chain");
+    let out = chain::run(&params, Some(&bar))?;
+    bar.finish_and_clear();
+    let sc = &params.scene;
+    let mut o = Outcome::default();
+
+    let chips_ok = (1..=32u8)
+        .filter(|&n| {
+            Prn::new(n)
+                .is_some_and(|p| p.first_ten_chips_octal() == FIRST_TEN_CHIPS_OCTAL[n as usize - 1])
+        })
+        .count();
+    let (mut doppler_max, mut code_max) = (0.0f64, 0.0f64);
+    for t in &out.tracked {
+        let truth = sc.truth(t.scene_index, 0, 0.0);
+        doppler_max =
+            doppler_max.max((f64::from(t.acquisition.doppler_hz) - truth.doppler_hz).abs());
+        let e = (f64::from(t.acquisition.code_phase_chips) - truth.code_phase_chips + 511.5)
+            .rem_euclid(1023.0)
+            - 511.5;
+        code_max = code_max.max(e.abs());
+    }
+    let stats = satellite_stats(&out, sc, cn0);
+    let lock_held = if out.tracked.len() < sc.satellites.len() {
+        0.0
+    } else {
+        stats
+            .iter()
+            .map(|s| s.lock_held_s)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let cn0_err = stats.iter().map(|s| s.cn0_err_max).fold(0.0, f64::max);
+    let (sum2, count) = stats.iter().fold((0.0, 0usize), |a, s| {
+        (a.0 + s.phase_sum2, a.1 + s.phase_count)
+    });
+    let phase_rms = if count > 0 {
+        (sum2 / count as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    let bound = phase_difference_rms_cycles(cn0, 1e-3);
+    // Multiple-access interference: each other satellite leaks SNR_j · E|ρ|² ≈ SNR_j/1023 of
+    // noise power into a prompt (Gold-code cross-correlation), so the receiver sees
+    // C/(N0 + I0), not the synthesized thermal C/N0.
+    let snr = 10f64.powf(cn0 / 10.0) * 1e-3;
+    let interference = (sc.satellites.len() as f64 - 1.0) * snr / 1023.0;
+    let mai_db = 10.0 * (1.0 + interference).log10();
+    let bound_mai = phase_difference_rms_cycles(cn0 - mai_db, 1e-3);
+
+    o.metric("prn_chips_ok", chips_ok)
+        .metric("acq_found", out.tracked.len())
+        .metric("acq_missed", sc.satellites.len() - out.tracked.len())
+        .metric("acq_false", out.false_detections.len())
+        .metric("doppler_err_hz_max", doppler_max)
+        .metric("code_err_chips_max", code_max)
+        .metric("lock_held_s", lock_held)
+        .metric("cn0_err_db_max", cn0_err)
+        .metric("phase_diff_err_rms_cycles", phase_rms)
+        .metric("phase_diff_bound_cycles", bound);
+    o.paper = json!({
+        "note": "no paper figure for this chain; the issue's acceptance targets",
+        "prn_chips_ok": 32, "acq_missed": 0, "acq_false": 0,
+        "doppler_err_hz_max": 250.0, "code_err_chips_max": 0.5, "lock_held_s": 60.0,
+        "cn0_err_db_max": 1.5, "phase_diff_err_rms_cycles": "≈ phase_diff_bound_cycles",
+    });
+    o.summary.push(format!(
+        "{} satellites at {cn0} dB-Hz, CS8 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
+        sc.satellites.len(),
+        out.acquisition_seconds,
+        out.synthesis_seconds,
+        out.tracking_seconds
+    ));
+    let cn0_err_mai = stats
+        .iter()
+        .map(|s| s.cn0_err_max_vs(cn0 - mai_db))
+        .fold(0.0, f64::max);
+    o.summary.push(format!(
+        "C/N0 error against C/(N0 + I0) = {:.2} dB-Hz (what a prompt/noise-tap estimator measures): max {cn0_err_mai:.2} dB",
+        cn0 - mai_db
+    ));
+    o.summary.push(format!(
+        "multiple-access interference of the other satellites: I0/N0 = {interference:.3} ({mai_db:.2} dB below the thermal C/N0); phase-difference bound with it {bound_mai:.4} cycle (thermal only {bound:.4})"
+    ));
+    for s in &stats {
+        o.summary.push(format!(
+            "PRN {:2}: lock held {:.2} s (from {:.2} s), C/N0 mean {:.2} dB-Hz (max error {:.2} dB), phase-difference error RMS {:.4} cycle",
+            s.prn,
+            s.lock_held_s,
+            s.first_lock_s,
+            s.cn0_mean,
+            s.cn0_err_max,
+            (s.phase_sum2 / s.phase_count.max(1) as f64).sqrt()
+        ));
+    }
+    if let Some(dir) = &ctx.out_dir {
+        write_files(dir, &params, &out, &mut o, cn0)?;
+    }
+    Ok(o)
+}
+
+struct SatStats {
+    prn: u8,
+    cn0_reports: Vec<f64>,
+    lock_held_s: f64,
+    first_lock_s: f64,
+    cn0_err_max: f64,
+    cn0_mean: f64,
+    phase_sum2: f64,
+    phase_count: usize,
+    per_second: Vec<[f64; 5]>,
+}
+
+impl SatStats {
+    fn cn0_err_max_vs(&self, reference: f64) -> f64 {
+        self.cn0_reports
+            .iter()
+            .map(|c| (c - reference).abs())
+            .fold(0.0, f64::max)
+    }
+}
+
+fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
+    out.tracked
+        .iter()
+        .map(|t| {
+            let k = t.scene_index;
+            let (mut best, mut run_start, mut first_lock) = (0.0f64, None::<f64>, f64::NAN);
+            for e in &t.epochs {
+                match (e.locked, run_start) {
+                    (true, None) => {
+                        run_start = Some(e.t);
+                        if first_lock.is_nan() {
+                            first_lock = e.t;
+                        }
+                    }
+                    (false, Some(s)) => {
+                        best = best.max(e.t - s);
+                        run_start = None;
+                    }
+                    _ => {}
+                }
+            }
+            if let (Some(s), Some(last)) = (run_start, t.epochs.last()) {
+                best = best.max(last.t + 5e-4 - s);
+            }
+            let (mut cn0_err, mut cn0_sum, mut cn0_n) = (0.0f64, 0.0, 0usize);
+            let (mut sum2, mut count) = (0.0, 0usize);
+            let mut per_second = Vec::new();
+            let mut second = (0.0, 0usize, 2.0f64);
+            for (j, e) in t.epochs.iter().enumerate() {
+                if e.t < 2.0 {
+                    continue;
+                }
+                // C/N0 reports change once per second: sample them once per 1000 epochs.
+                if j % 1000 == 0 {
+                    cn0_err = cn0_err.max((e.cn0_dbhz - cn0).abs());
+                    cn0_sum += e.cn0_dbhz;
+                    cn0_n += 1;
+                }
+                if e.t.floor() > second.2 && second.1 > 0 {
+                    let doppler_err = e.doppler_hz - sc.truth(k, 0, e.t).doppler_hz;
+                    per_second.push([
+                        second.2 + 1.0,
+                        f64::from(t.acquisition.prn.number()),
+                        e.cn0_dbhz,
+                        doppler_err,
+                        (second.0 / second.1 as f64).sqrt(),
+                    ]);
+                    second = (0.0, 0, e.t.floor());
+                }
+                let a = e.prompt[0];
+                for x in 1..3 {
+                    let b = e.prompt[x];
+                    let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / TAU;
+                    let truth = sc.truth(k, x, e.t).carrier_phase_cycles
+                        - sc.truth(k, 0, e.t).carrier_phase_cycles;
+                    let err = wrap(measured - truth);
+                    sum2 += err * err;
+                    count += 1;
+                    second.0 += err * err;
+                    second.1 += 1;
+                }
+            }
+            SatStats {
+                prn: t.acquisition.prn.number(),
+                cn0_reports: t
+                    .epochs
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, e)| e.t >= 2.0 && j % 1000 == 0)
+                    .map(|(_, e)| e.cn0_dbhz)
+                    .collect(),
+                lock_held_s: best,
+                first_lock_s: first_lock,
+                cn0_err_max: cn0_err,
+                cn0_mean: cn0_sum / cn0_n.max(1) as f64,
+                phase_sum2: sum2,
+                phase_count: count,
+                per_second,
+            }
+        })
+        .collect()
+}
+
+fn write_files(
+    dir: &std::path::Path,
+    params: &ChainParams,
+    out: &ChainOutput,
+    o: &mut Outcome,
+    cn0: f64,
+) -> Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let stats = satellite_stats(out, &params.scene, cn0);
+    let csv = dir.join("signal_per_second.csv");
+    write_csv(
+        &csv,
+        &[
+            "t_s",
+            "prn",
+            "cn0_dbhz",
+            "doppler_err_hz",
+            "phase_diff_err_rms_cycles",
+        ],
+        stats.iter().flat_map(|s| s.per_second.iter().copied()),
+    )?;
+    o.files.push(csv);
+    let png = dir.join("signal.png");
+    let series = |col: usize| -> Vec<Series> {
+        stats
+            .iter()
+            .enumerate()
+            .map(|(c, s)| {
+                Series::line(
+                    format!("PRN {}", s.prn),
+                    s.per_second.iter().map(|r| (r[0], r[col])).collect(),
+                    c,
+                )
+            })
+            .collect()
+    };
+    plot_panels(
+        &png,
+        &format!("signal: 8 satellites at {cn0} dB-Hz, three antennas, CS8 2.6 Msps"),
+        "time (s)",
+        &[
+            Panel {
+                y_label: "C/N0 estimate (dB-Hz)".into(),
+                series: series(2),
+            },
+            Panel {
+                y_label: "Doppler error (Hz)".into(),
+                series: series(3),
+            },
+            Panel {
+                y_label: "phase-difference error RMS per s (cycle)".into(),
+                series: series(4),
+            },
+        ],
+    )?;
+    o.files.push(png);
+    // The first 100 ms as CS8 files (one per antenna), written and read back.
+    let n = 260_000;
+    let analog = params.scene.synthesize(0, n);
+    let streams = encode(SampleFormat::Cs8, &analog)?;
+    let paths = write_streams(dir, "signal_first_100ms", SampleFormat::Cs8, &streams)?;
+    anyhow::ensure!(
+        read_streams(&paths)? == streams,
+        "CS8 files do not read back"
+    );
+    o.files.extend(paths);
+    Ok(())
+}

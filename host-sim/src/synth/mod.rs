@@ -1,0 +1,16 @@
+//! The coherent three-antenna GPS L1 C/A sample synthesizer.
+//!
+//! * [`scene`]: the signal model (satellites with code delay, Doppler and Doppler rate, data
+//!   bits; per-antenna carrier phase from the baseline geometry and the true attitude; line
+//!   biases; thermal noise at a given C/N0) and the parallel sample generator.
+//! * [`quantize`]: front-end quantization into the core's sample formats, and decoding back
+//!   with the core's decoder.
+//! * [`file`](mod@file): CS8/CS16 (and the other formats') files, written and read back.
+//! * [`codes`]: the synthesizer's own C/A code generator.
+
+pub mod codes;
+pub mod file;
+pub mod quantize;
+pub mod scene;
+
+pub use scene::{AnalogSamples, AttitudeMotion, FrontEnd, Satellite, Scene, SignalTruth};

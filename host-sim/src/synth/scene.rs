@@ -1,0 +1,300 @@
+//! The coherent three-antenna signal model and its sample generator (f64 truth, f32 samples).
+//!
+//! Satellite `i` seen at antenna `P` (one sample clock for all antennas):
+//!
+//! ```text
+//! code phase   C_P(t) = C₀ + f_c t + (f_c/f_L1)(f_D t + ½ ḟ_D t²) + f_c (μ·r_P(t))/c      chips
+//! carrier      Φ_P(t) = φ₀ + f_D t + ½ ḟ_D t² + (μ·r_P(t))/λ + b_P                         cycles
+//! complex      x_P(t) = A d(t) c(C_P(t)) e^{j2π(Φ_P(t) + f_IF t)} + n,   n ~ CN(0, 2)
+//! real IF      x_P(t) = √2 A d(t) c(C_P(t)) cos 2π(Φ_P(t) + f_IF t) + n,   n ~ N(0, 1)
+//! ```
+//! with `r_P(t) = C_rb(t) r_P,b` (antenna position, reference frame), `μ` the unit vector to
+//! the satellite (reference frame), `b_P` the antenna's line bias, `d(t)` the 50 bit/s data
+//! (edges at every 20th code epoch) and `A = √(2 (C/N0) / f_s)`, so that a 1 ms coherent sum
+//! has `SNR = (C/N0)·T`. `(μ·r_P)/λ` is paper 003's `ψ_P/2π`, eq. (4)/(24).
+//!
+//! Within a sub-block of [`SUB_BLOCK`] samples the code rate, carrier frequency and geometric
+//! phase are those at the sub-block's middle and its start phases are exact (closed form), so
+//! the phase error is below `ḟ_D (B/f_s)²/8` (10⁻⁵ cycle at 100 Hz/s). The noise of each
+//! sub-block and antenna has its own seed: the output does not depend on how a run is cut
+//! into calls, nor on the number of threads.
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+
+use super::codes::ca_code;
+
+/// Speed of light, m/s.
+pub const SPEED_OF_LIGHT: f64 = 299_792_458.0;
+/// GPS L1, Hz.
+pub const L1_HZ: f64 = 1_575.42e6;
+/// L1 wavelength, m.
+pub const L1_WAVELENGTH: f64 = SPEED_OF_LIGHT / L1_HZ;
+/// C/A chip rate, Hz.
+pub const CHIP_RATE: f64 = 1.023e6;
+/// Samples generated with one set of rates and one noise seed.
+pub const SUB_BLOCK: usize = 4096;
+
+/// One satellite's signal.
+#[derive(Clone, Debug)]
+pub struct Satellite {
+    /// PRN, 1–32.
+    pub prn: u8,
+    /// Carrier-to-noise density, dB-Hz (before quantization).
+    pub cn0_dbhz: f64,
+    /// Doppler at t = 0, Hz.
+    pub doppler_hz: f64,
+    /// Doppler rate, Hz/s.
+    pub doppler_rate_hz_s: f64,
+    /// Code phase at the array origin at t = 0, chips.
+    pub code_phase_chips: f64,
+    /// Carrier phase at the array origin at t = 0, cycles.
+    pub carrier_phase_cycles: f64,
+    /// Unit vector from the receiver to the satellite, reference frame.
+    pub los_ref: Vector3<f64>,
+    /// Seed of the navigation data bits; `None`: no data modulation.
+    pub data_seed: Option<u64>,
+}
+
+/// Attitude of the body (`C_rb`) over time.
+#[derive(Clone, Copy, Debug)]
+pub enum AttitudeMotion {
+    /// Fixed attitude.
+    Constant(Matrix3<f64>),
+    /// `C_rb(t) = C_rb(0) · exp([ω t]×)`, `ω` constant in body axes (rad/s).
+    ConstantRate {
+        /// Attitude at t = 0.
+        c_rb0: Matrix3<f64>,
+        /// Body rate, body axes, rad/s.
+        omega_b: Vector3<f64>,
+    },
+}
+
+impl AttitudeMotion {
+    /// `C_rb(t)`.
+    pub fn c_rb(&self, t: f64) -> Matrix3<f64> {
+        match *self {
+            Self::Constant(c) => c,
+            Self::ConstantRate { c_rb0, omega_b } => {
+                c_rb0 * Rotation3::from_scaled_axis(omega_b * t).into_inner()
+            }
+        }
+    }
+}
+
+/// Front end: sampling.
+#[derive(Clone, Copy, Debug)]
+pub struct FrontEnd {
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Intermediate frequency, Hz (0 for complex baseband).
+    pub intermediate_frequency_hz: f64,
+    /// Complex (I/Q) or real samples.
+    pub complex: bool,
+}
+
+/// The whole scene: satellites, antenna array, attitude, front end, noise seed.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Satellites.
+    pub satellites: Vec<Satellite>,
+    /// Antenna positions, body frame, m (antenna 0 is the reference).
+    pub antennas_b: Vec<Vector3<f64>>,
+    /// Per-antenna line biases (carrier phase added by the antenna's cable and RF chain),
+    /// cycles.
+    pub line_bias_cycles: Vec<f64>,
+    /// Attitude over time.
+    pub attitude: AttitudeMotion,
+    /// Front end.
+    pub front_end: FrontEnd,
+    /// Noise seed; `None` for noise-free samples.
+    pub noise_seed: Option<u64>,
+}
+
+/// Truth of one satellite at one antenna at one instant.
+#[derive(Clone, Copy, Debug)]
+pub struct SignalTruth {
+    /// Code phase, chips in `[0, 1023)`.
+    pub code_phase_chips: f64,
+    /// Code phase since t = 0 in chips (not wrapped).
+    pub code_chips_total: f64,
+    /// Carrier phase (without the IF), cycles.
+    pub carrier_phase_cycles: f64,
+    /// Doppler, Hz.
+    pub doppler_hz: f64,
+}
+
+/// Samples of one antenna, noise σ = 1 per component.
+#[derive(Clone, Debug, Default)]
+pub struct AnalogSamples {
+    /// In-phase (or real) samples.
+    pub i: Vec<f32>,
+    /// Quadrature samples (empty for real sampling).
+    pub q: Vec<f32>,
+}
+
+impl Scene {
+    /// The truth of satellite `sat` at antenna `antenna` at time `t` (s).
+    pub fn truth(&self, sat: usize, antenna: usize, t: f64) -> SignalTruth {
+        let s = &self.satellites[sat];
+        let geo_m = s
+            .los_ref
+            .dot(&(self.attitude.c_rb(t) * self.antennas_b[antenna]));
+        let dopp_cycles = s.doppler_hz * t + 0.5 * s.doppler_rate_hz_s * t * t;
+        let code = s.code_phase_chips
+            + CHIP_RATE * t
+            + CHIP_RATE / L1_HZ * dopp_cycles
+            + CHIP_RATE * geo_m / SPEED_OF_LIGHT;
+        SignalTruth {
+            code_phase_chips: code.rem_euclid(1023.0),
+            code_chips_total: code,
+            carrier_phase_cycles: s.carrier_phase_cycles
+                + dopp_cycles
+                + geo_m / L1_WAVELENGTH
+                + self.line_bias_cycles.get(antenna).copied().unwrap_or(0.0),
+            doppler_hz: s.doppler_hz + s.doppler_rate_hz_s * t,
+        }
+    }
+
+    /// Signal amplitude of a satellite (noise σ = 1 per component).
+    pub fn amplitude(&self, sat: usize) -> f64 {
+        (2.0 * 10f64.powf(self.satellites[sat].cn0_dbhz / 10.0) / self.front_end.sample_rate_hz)
+            .sqrt()
+    }
+
+    /// Samples `[first, first + n)` of every antenna (`first` a multiple of [`SUB_BLOCK`] keeps
+    /// the noise identical to a run cut elsewhere), in parallel over sub-blocks.
+    pub fn synthesize(&self, first: u64, n: usize) -> Vec<AnalogSamples> {
+        let codes: Vec<Vec<f32>> = self.satellites.iter().map(|s| ca_code(s.prn)).collect();
+        let n_ant = self.antennas_b.len();
+        let complex = self.front_end.complex;
+        let mut out: Vec<AnalogSamples> = (0..n_ant)
+            .map(|_| AnalogSamples {
+                i: vec![0.0; n],
+                q: if complex { vec![0.0; n] } else { Vec::new() },
+            })
+            .collect();
+        // Work items: (antenna, sub-block); each owns disjoint output slices.
+        let mut items: Vec<(usize, u64, &mut [f32], &mut [f32])> = Vec::new();
+        for (a, ant) in out.iter_mut().enumerate() {
+            let mut qi = ant.q.chunks_mut(SUB_BLOCK);
+            for (b, ci) in ant.i.chunks_mut(SUB_BLOCK).enumerate() {
+                let cq = qi.next().unwrap_or_default();
+                items.push((a, first + (b * SUB_BLOCK) as u64, ci, cq));
+            }
+        }
+        items
+            .into_par_iter()
+            .for_each(|(a, k0, i, q)| self.fill(a, k0, i, q, &codes));
+        out
+    }
+
+    fn fill(
+        &self,
+        antenna: usize,
+        k0: u64,
+        out_i: &mut [f32],
+        out_q: &mut [f32],
+        codes: &[Vec<f32>],
+    ) {
+        let fe = &self.front_end;
+        let fs = fe.sample_rate_hz;
+        let n = out_i.len();
+        let t0 = k0 as f64 / fs;
+        let t_mid = (k0 as f64 + 0.5 * n as f64) / fs;
+        let dt = 1.0 / fs;
+        for (si, s) in self.satellites.iter().enumerate() {
+            let amp = self.amplitude(si)
+                * if fe.complex {
+                    1.0
+                } else {
+                    std::f64::consts::SQRT_2
+                };
+            let tr0 = self.truth(si, antenna, t0);
+            let tr_mid = self.truth(si, antenna, t_mid);
+            // Rates over the sub-block from the exact phases at its start and middle.
+            let half = t_mid - t0;
+            let code_rate = (tr_mid.code_chips_total - tr0.code_chips_total) / half; // chips/s
+            let carr_rate = (tr_mid.carrier_phase_cycles - tr0.carrier_phase_cycles) / half;
+            let phase0 = tr0.carrier_phase_cycles + fe.intermediate_frequency_hz * t0;
+            let dphi = (carr_rate + fe.intermediate_frequency_hz) * dt;
+            let (mut pr, mut pi) = {
+                let a = std::f64::consts::TAU * phase0.rem_euclid(1.0);
+                (a.cos(), a.sin())
+            };
+            let (wr, wi) = {
+                let a = std::f64::consts::TAU * dphi;
+                (a.cos(), a.sin())
+            };
+            // Code phase in 32.32 fixed point (own implementation), epoch count for data.
+            let total = tr0.code_chips_total;
+            let mut epoch = (total / 1023.0).floor() as i64;
+            let mut cph = ((total - 1023.0 * epoch as f64) * 4_294_967_296.0) as u64;
+            let cstep = (code_rate * dt * 4_294_967_296.0).round() as u64;
+            const WRAP: u64 = 1023u64 << 32;
+            let code = &codes[si];
+            let mut bit = data_bit(s.data_seed, epoch);
+            for k in 0..n {
+                let chip = code[((cph >> 32) as usize).min(1022)];
+                let v = amp * f64::from(chip * bit);
+                if fe.complex {
+                    out_i[k] += (v * pr) as f32;
+                    out_q[k] += (v * pi) as f32;
+                } else {
+                    out_i[k] += (v * pr) as f32;
+                }
+                // Advance the carrier phasor and the code.
+                let r = pr * wr - pi * wi;
+                pi = pr * wi + pi * wr;
+                pr = r;
+                cph += cstep;
+                if cph >= WRAP {
+                    cph -= WRAP;
+                    epoch += 1;
+                    bit = data_bit(s.data_seed, epoch);
+                }
+            }
+        }
+        if let Some(seed) = self.noise_seed {
+            let mut rng = ChaCha8Rng::seed_from_u64(mix(seed, antenna as u64, k0));
+            for v in out_i.iter_mut() {
+                let z: f32 = StandardNormal.sample(&mut rng);
+                *v += z;
+            }
+            for v in out_q.iter_mut() {
+                let z: f32 = StandardNormal.sample(&mut rng);
+                *v += z;
+            }
+        }
+    }
+}
+
+/// The data bit (±1) in force during code epoch `epoch` (bit edges every 20 epochs).
+pub fn data_bit(seed: Option<u64>, epoch: i64) -> f32 {
+    match seed {
+        None => 1.0,
+        Some(s) => {
+            let bit_index = epoch.div_euclid(20) as u64;
+            if mix(s, 0x5a5a, bit_index) & 1 == 0 {
+                1.0
+            } else {
+                -1.0
+            }
+        }
+    }
+}
+
+/// SplitMix64-style hash of three words (seeds of the noise and data streams).
+pub fn mix(a: u64, b: u64, c: u64) -> u64 {
+    let mut z = a
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(b.wrapping_mul(0xBF58_476D_1CE4_E5B9))
+        .wrapping_add(c.wrapping_mul(0x94D0_49BB_1331_11EB))
+        .wrapping_add(0x2545_F491_4F6C_DD1D);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}

@@ -1,0 +1,98 @@
+//! Configuration of a tracking channel.
+
+use crate::error::TrackingError;
+use crate::signal::correlator::{CorrelatorConfig, SlaveTaps};
+
+/// Configuration of a channel (front end and loop parameters).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChannelConfig {
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Intermediate frequency, Hz.
+    pub intermediate_frequency_hz: f64,
+    /// Early/late offset from prompt, chips.
+    pub early_late_offset_chips: f32,
+    /// Taps of the slaved antennas (all four by default).
+    pub slave_taps: SlaveTaps,
+    /// Duration of the pull-in schedule after hand-over, ms.
+    pub pull_in_ms: u32,
+    /// PLL noise bandwidth, Hz.
+    pub pll_bandwidth_hz: f32,
+    /// FLL-assist bandwidth during pull-in, Hz.
+    pub fll_pull_in_bandwidth_hz: f32,
+    /// FLL-assist bandwidth after pull-in, Hz (0: pure PLL).
+    pub fll_bandwidth_hz: f32,
+    /// DLL bandwidth during pull-in, Hz.
+    pub dll_pull_in_bandwidth_hz: f32,
+    /// DLL bandwidth after pull-in, Hz.
+    pub dll_bandwidth_hz: f32,
+    /// Lock-detector window, epochs.
+    pub lock_window: u16,
+    /// C/N0 reporting window, epochs.
+    pub cn0_window: u16,
+    /// Code-lock C/N0 threshold, dB-Hz.
+    pub cn0_lock_threshold_dbhz: f32,
+    /// Phase-lock indicator threshold (≈ cos 2Δφ).
+    pub pld_threshold: f32,
+}
+
+impl ChannelConfig {
+    /// The defaults for a front end: 0.5 chip offset, 15 Hz PLL, FLL assist 2 Hz for 300 ms
+    /// of pull-in then off (pure PLL), DLL 2 Hz then 0.5 Hz, 100 ms lock windows, 1 s C/N0 windows, code lock
+    /// above 26 dB-Hz, phase lock above cos 2Δφ = 0.5.
+    pub fn new(sample_rate_hz: f64, intermediate_frequency_hz: f64) -> Self {
+        Self {
+            sample_rate_hz,
+            intermediate_frequency_hz,
+            early_late_offset_chips: 0.5,
+            slave_taps: SlaveTaps::All,
+            pull_in_ms: 300,
+            pll_bandwidth_hz: 15.0,
+            fll_pull_in_bandwidth_hz: 2.0,
+            fll_bandwidth_hz: 0.0,
+            dll_pull_in_bandwidth_hz: 2.0,
+            dll_bandwidth_hz: 0.5,
+            lock_window: 100,
+            cn0_window: 1000,
+            cn0_lock_threshold_dbhz: 26.0,
+            pld_threshold: 0.5,
+        }
+    }
+
+    pub(crate) fn correlator(&self) -> CorrelatorConfig {
+        CorrelatorConfig {
+            sample_rate_hz: self.sample_rate_hz,
+            intermediate_frequency_hz: self.intermediate_frequency_hz,
+            early_late_offset_chips: self.early_late_offset_chips,
+            slave_taps: self.slave_taps,
+        }
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), TrackingError> {
+        let v = [
+            self.pll_bandwidth_hz,
+            self.fll_pull_in_bandwidth_hz,
+            self.fll_bandwidth_hz,
+            self.dll_pull_in_bandwidth_hz,
+            self.dll_bandwidth_hz,
+            self.cn0_lock_threshold_dbhz,
+            self.pld_threshold,
+        ];
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(TrackingError::NonFinite);
+        }
+        let bw_ok = |b: f32| (0.0..=100.0).contains(&b);
+        if !(bw_ok(self.pll_bandwidth_hz)
+            && bw_ok(self.fll_pull_in_bandwidth_hz)
+            && bw_ok(self.fll_bandwidth_hz)
+            && bw_ok(self.dll_pull_in_bandwidth_hz)
+            && bw_ok(self.dll_bandwidth_hz))
+            || self.lock_window == 0
+            || self.cn0_window == 0
+        {
+            return Err(TrackingError::InvalidConfig);
+        }
+        Ok(())
+    }
+}
