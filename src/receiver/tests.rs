@@ -1,0 +1,1 @@
+//! Receiver tests: cold start to fine attitude, faults.
