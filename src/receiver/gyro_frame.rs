@@ -8,12 +8,12 @@
 //! fixed, so the fine filter works in the frame `F(t) = C_rK₀ M(t)`, in which the body's
 //! attitude is constant up to the gyro's errors (see [`super::fine`]).
 
-use nalgebra::{SMatrix, Vector3};
+use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::geometry::Quaternion;
 use crate::gyro::{
-    AttitudePropagator, BiasOnly, CalibratorConfig, EpochOutcome, GyroCalibrator, PulseDecoder,
-    ReferenceDriftModel, ResidualCentering, SqrtInformation,
+    AttitudePropagator, BiasOnly, CalibratorConfig, EpochOutcome, GyroCalibrator,
+    LeastSquaresAccumulator, PulseDecoder, ReferenceDriftModel, ResidualCentering, SqrtInformation,
 };
 use crate::{CalibrationError, Real, ReceiverError};
 
@@ -28,6 +28,10 @@ impl<T: Real> ReferenceDriftModel<T, 0> for NoReferenceDrift {
         SMatrix::zeros()
     }
 }
+
+/// Weight of the prior rows `w₀ = 0` relative to one calibration equation: `w₀` is taken as
+/// twice as uncertain as one equation's noise (the reference's error at a single epoch).
+const W0_PRIOR_WEIGHT: f32 = 0.5;
 
 /// The calibrator the receiver runs: `x = [w₀; c₇..₉]`, 6 unknowns, Givens accumulator.
 pub type BiasCalibrator =
@@ -50,6 +54,27 @@ pub(crate) struct GyroFrame {
     window_start: u64,
     /// Calibrations applied.
     pub calibrations: u32,
+    /// What the calibration windows gave.
+    pub report: CalibrationReport,
+}
+
+/// What the gyro calibration windows have given so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CalibrationReport {
+    /// Windows started.
+    pub started: u32,
+    /// Windows solved.
+    pub solved: u32,
+    /// Windows whose estimate was applied.
+    pub applied: u32,
+    /// Windows abandoned (a reference or an increment the calibrator refused, or a solve
+    /// that failed: rank deficient, not converged).
+    pub failed: u32,
+    /// The last estimate of the biases, rad/s (gyro axes).
+    pub last_bias: [f32; 3],
+    /// Its formal standard deviations, rad/s.
+    pub last_sigma: [f32; 3],
 }
 
 impl GyroFrame {
@@ -72,12 +97,18 @@ impl GyroFrame {
             calibrator: None,
             window_start: 0,
             calibrations: 0,
+            report: CalibrationReport::default(),
         })
     }
 
     /// Time of the last increment's end, s since the receiver started.
     pub fn time_s(&self) -> f64 {
-        self.samples as f64 * f64::from(self.config.sample_interval_s)
+        self.samples as f64 * seconds(self.config.sample_interval_s)
+    }
+
+    /// Increments received.
+    pub fn samples(&self) -> u64 {
+        self.samples
     }
 
     /// True when the last increment completed a propagation step.
@@ -104,6 +135,7 @@ impl GyroFrame {
         if let Some(c) = calibrator.as_mut() {
             if c.push_increment(theta).is_err() {
                 calibrator = None;
+                self.report.failed += 1;
             }
         }
         self.propagator = propagator;
@@ -117,7 +149,7 @@ impl GyroFrame {
 
     /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate.
     pub fn attitude_at(&self, t: f64) -> Quaternion<f32> {
-        let h = f64::from(self.config.sample_interval_s);
+        let h = seconds(self.config.sample_interval_s);
         // the propagator holds M at the last completed step
         let step_samples = self.samples - (self.samples % 2);
         let t_step = step_samples as f64 * h;
@@ -132,16 +164,39 @@ impl GyroFrame {
             return;
         }
         let cfg = CalibratorConfig::new(self.config.sample_interval_s);
+        // A prior on w₀: the window starts at the reference itself (M(t₀) = N(t₀)), so w₀ is
+        // the reference's own error, about the noise of one equation. Without it the
+        // component of w₀ along a steady spin axis is unobservable (Φ(p) w₀ = p × w₀ = 0)
+        // and every solve of a slowly spinning body is rank deficient.
+        let mut prior = SqrtInformation::new();
+        for i in 0..3 {
+            let mut row = SVector::<f32, 6>::zeros();
+            if let Some(r) = row.get_mut(i) {
+                *r = W0_PRIOR_WEIGHT;
+            }
+            let _ = prior.add_row(&row, 0.0);
+        }
         let c = BiasCalibrator::new(
             cfg,
             BiasOnly,
             NoReferenceDrift,
-            SqrtInformation::new(),
-            self.propagator.attitude(),
+            prior,
+            // the calibrator integrates from the reference itself: both attitudes must be
+            // relative to the same (inertial) frame, which the receiver's own `M` is not
+            *q_rb,
             *q_rb,
         )
         .and_then(|c| c.with_gyro_correction(self.bias));
-        self.calibrator = c.ok();
+        match c {
+            Ok(c) => {
+                self.calibrator = Some(c);
+                self.report.started += 1;
+            }
+            Err(_) => {
+                self.calibrator = None;
+                self.report.failed += 1;
+            }
+        }
         self.window_start = self.samples;
     }
 
@@ -161,6 +216,7 @@ impl GyroFrame {
             Ok(EpochOutcome::Used(_)) | Ok(EpochOutcome::Skipped(_)) => {}
             Err(_) => {
                 self.calibrator = None;
+                self.report.failed += 1;
                 return false;
             }
         }
@@ -170,24 +226,38 @@ impl GyroFrame {
             return false;
         }
         let applied = match c.solve() {
-            Ok(est)
-                if est.c.iter().all(|v| v.is_finite())
+            Ok(est) => {
+                self.report.solved += 1;
+                self.report.last_bias = [est.c.x, est.c.y, est.c.z];
+                self.report.last_sigma = [est.c_std.x, est.c_std.y, est.c_std.z];
+                let usable = est.c.iter().all(|v| v.is_finite())
                     && est
                         .c_std
                         .iter()
-                        .all(|&s| s <= self.config.calibration_max_sigma) =>
-            {
-                self.bias = est.c;
-                self.calibrations += 1;
-                true
+                        .all(|&s| s <= self.config.calibration_max_sigma);
+                if usable {
+                    self.bias = est.c;
+                    self.calibrations += 1;
+                    self.report.applied += 1;
+                }
+                usable
             }
-            _ => false,
+            Err(_) => {
+                self.report.failed += 1;
+                false
+            }
         };
         // next window, from the current reference
         self.calibrator = None;
         self.start_calibration(q_rb);
         applied
     }
+}
+
+/// A time step given in `f32` seconds as the `f64` it stands for (rounded to the nanosecond:
+/// `0.01f32` is 0.009 999 999 776 s, whose error would add up to milliseconds over hours).
+pub(crate) fn seconds(step: f32) -> f64 {
+    libm::round(f64::from(step) * 1e9) * 1e-9
 }
 
 fn map_calibration(e: CalibrationError) -> ReceiverError {

@@ -91,7 +91,7 @@ mod tests;
 
 pub use config::{GyroConfig, ReceiverConfig};
 pub use fine::FINE_STATES;
-pub use gyro_frame::{BiasCalibrator, NoReferenceDrift};
+pub use gyro_frame::{BiasCalibrator, CalibrationReport, NoReferenceDrift};
 pub use output::{AttitudeSource, ReceiverAttitude, ReceiverEvent, ReceiverHealth, StageEstimate};
 pub use receiver::{AttitudeReceiver, EVENT_QUEUE};
 pub use satellite::SatelliteAiding;

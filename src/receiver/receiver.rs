@@ -20,7 +20,7 @@ use super::carrier::{
 };
 use super::config::ReceiverConfig;
 use super::fine::FineStage;
-use super::gyro_frame::GyroFrame;
+use super::gyro_frame::{seconds, CalibrationReport, GyroFrame};
 use super::output::{
     AttitudeSource, ReceiverAttitude, ReceiverEvent, ReceiverHealth, StageEstimate,
 };
@@ -29,6 +29,15 @@ use super::MAX_SATELLITES;
 
 /// Events kept until read.
 pub const EVENT_QUEUE: usize = 32;
+
+/// Where a coast on the gyro starts: the last locked fine attitude.
+#[derive(Clone, Copy, Debug)]
+struct Coast {
+    epoch: u64,
+    q_rb: Quaternion<f32>,
+    covariance: Matrix3<f32>,
+    m: Quaternion<f32>,
+}
 
 /// The observations of one epoch.
 #[derive(Clone, Debug, Default)]
@@ -62,6 +71,8 @@ pub struct AttitudeReceiver {
     snapshot: Option<(StageEstimate, Quaternion<f32>)>,
     rigid: Option<RigidBodyFilter<f32>>,
     rigid_estimate: Option<StageEstimate>,
+    /// Epoch of the rigid-body filter's last step.
+    rigid_last: u64,
     gyro: Option<GyroFrame>,
     monitor: AntennaMonitor,
     events: Deque<ReceiverEvent, EVENT_QUEUE>,
@@ -69,7 +80,8 @@ pub struct AttitudeReceiver {
     health: ReceiverHealth,
     windows: u64,
     /// The fine attitude's covariance when it last updated (start of a coast).
-    coast_start: Option<(u64, Matrix3<f32>)>,
+    /// The last locked fine attitude: epoch, `q_rb`, covariance, and the gyro's `M` then.
+    coast_start: Option<Coast>,
 }
 
 impl AttitudeReceiver {
@@ -112,6 +124,7 @@ impl AttitudeReceiver {
             snapshot: None,
             rigid: None,
             rigid_estimate: None,
+            rigid_last: 0,
             gyro,
             monitor: AntennaMonitor::default(),
             events: Deque::new(),
@@ -242,9 +255,7 @@ impl AttitudeReceiver {
         if !self.started {
             self.started = true;
             self.open = epoch;
-            self.buckets = [Bucket::default(), Bucket::default()];
-            self.buckets[0].epoch = epoch;
-            self.buckets[1].epoch = epoch + 1;
+            self.reset_buckets(epoch);
         }
         if epoch < self.open {
             return Err(ReceiverError::StaleEpoch);
@@ -254,7 +265,9 @@ impl AttitudeReceiver {
         }
         let mut obs = *o;
         obs.los = [los.x, los.y, los.z];
-        let bucket = &mut self.buckets[(epoch % 2) as usize];
+        let Some(bucket) = self.buckets.get_mut((epoch % 2) as usize) else {
+            return Err(ReceiverError::StaleEpoch);
+        };
         bucket.epoch = epoch;
         if let Some(existing) = bucket.observations.iter_mut().find(|b| b.id == obs.id) {
             *existing = obs;
@@ -278,26 +291,26 @@ impl AttitudeReceiver {
         let limit = epoch.min(self.open + u64::from(self.config.window_epochs));
         while self.open <= limit {
             let k = self.open;
-            let i = (k % 2) as usize;
-            let bucket = core::mem::take(&mut self.buckets[i]);
+            let slot = self.buckets.get_mut((k % 2) as usize);
+            let bucket = slot.map(core::mem::take).unwrap_or_default();
             let observations = if bucket.epoch == k {
                 bucket.observations
             } else {
                 Vec::new()
             };
             self.close_epoch(k, &observations);
-            self.buckets[i] = Bucket {
-                epoch: k + 2,
-                observations: Vec::new(),
-            };
+            if let Some(b) = self.buckets.get_mut((k % 2) as usize) {
+                *b = Bucket {
+                    epoch: k + 2,
+                    observations: Vec::new(),
+                };
+            }
             self.open = k + 1;
         }
         if epoch >= self.open {
             // the jump was larger than a window: skip the empty epochs in between
             self.open = epoch + 1;
-            self.buckets = [Bucket::default(), Bucket::default()];
-            self.buckets[(self.open % 2) as usize].epoch = self.open;
-            self.buckets[((self.open + 1) % 2) as usize].epoch = self.open + 1;
+            self.reset_buckets(self.open);
         }
     }
 
@@ -354,6 +367,11 @@ impl AttitudeReceiver {
             .map_or([0.0; 3], |g| [g.bias.x, g.bias.y, g.bias.z])
     }
 
+    /// What the gyro calibration has given (`None` without a gyro).
+    pub fn gyro_calibration(&self) -> Option<CalibrationReport> {
+        self.gyro.as_ref().map(|g| g.report)
+    }
+
     /// Health flags.
     pub fn health(&self) -> ReceiverHealth {
         self.health
@@ -376,6 +394,19 @@ impl AttitudeReceiver {
 
     // ---------------------------------------------------------------- internals
 
+    /// Empty buckets for epochs `first` and `first + 1`.
+    fn reset_buckets(&mut self, first: u64) {
+        for (i, b) in self.buckets.iter_mut().enumerate() {
+            *b = Bucket::default();
+            // the bucket of epoch e is e % 2
+            b.epoch = if (first % 2) as usize == i {
+                first
+            } else {
+                first + 1
+            };
+        }
+    }
+
     fn event(&mut self, e: ReceiverEvent) {
         if self.events.is_full() {
             let _ = self.events.pop_front();
@@ -386,7 +417,7 @@ impl AttitudeReceiver {
 
     /// `M(t)` at the centre of `epoch` (identity without a gyro).
     fn gyro_attitude(&self, epoch: u64) -> Quaternion<f32> {
-        let t = (epoch as f64 + 0.5) * f64::from(self.config.epoch_s);
+        let t = (epoch as f64 + 0.5) * seconds(self.config.epoch_s);
         self.gyro
             .as_ref()
             .map_or_else(Quaternion::identity, |g| g.attitude_at(t))
@@ -402,15 +433,17 @@ impl AttitudeReceiver {
             if f.lock() == LockStatus::Locked && fresh && !self.any_blocked() {
                 return (f.attitude(m), f.covariance(), AttitudeSource::OneStage);
             }
-            if let (Some((start, p0)), Some(g)) = (self.coast_start, &self.gyro) {
-                let dt = epoch.saturating_sub(start) as f32 * self.config.epoch_s;
+            if let (Some(c0), Some(g)) = (self.coast_start, &self.gyro) {
+                let dt = epoch.saturating_sub(c0.epoch) as f32 * self.config.epoch_s;
                 if dt <= self.config.max_coast_s {
                     let c = &g.config;
                     let grow = c.angle_random_walk * c.angle_random_walk * dt
                         + c.residual_rate_sigma * c.residual_rate_sigma * dt * dt;
+                    // the body's rotation since then, from the gyro: C_rb(t) = C_rb(t₀) M(t₀)ᵀ M(t)
+                    let q = c0.q_rb * c0.m.conjugate() * *m;
                     return (
-                        f.attitude(m),
-                        p0 + Matrix3::identity() * grow,
+                        q.normalize().unwrap_or(q),
+                        c0.covariance + Matrix3::identity() * grow,
                         AttitudeSource::GyroCoast,
                     );
                 }
@@ -450,9 +483,10 @@ impl AttitudeReceiver {
         // references for the calibration at the window boundaries, from the locked fine
         // attitude
         let t = g.time_s();
-        let window = f64::from(self.config.window_s());
-        let phase = t / window;
-        if (phase - libm::round(phase)).abs() > 1e-6 {
+        // samples per window: a whole number of steps (checked by the configuration)
+        let per_window =
+            libm::round(seconds(self.config.window_s()) / seconds(g.config.sample_interval_s));
+        if !(per_window >= 1.0) || g.samples() % (per_window as u64) != 0 {
             return;
         }
         let Some(f) = &self.fine else {
@@ -545,20 +579,38 @@ impl AttitudeReceiver {
                 }
             }
         }
-        // the fine filter
+        // the fine filter: stepped while it has usable input; frozen while the gyro carries
+        // the attitude (its own rate estimate, a loop's, is far noisier than the calibrated
+        // gyro), and restarted from the coasted attitude with the grown covariance when the
+        // input returns after more than a moment
         let usable = !self.any_blocked() && fine_obs.len() >= usize::from(cfg.min_fine_satellites);
-        if let Some(mut f) = self.fine.clone() {
+        if usable {
+            let coasted = self
+                .fine
+                .as_ref()
+                .map_or(0, |f| k.saturating_sub(f.last_update));
+            if self.gyro.is_some() && coasted > u64::from(cfg.window_epochs) {
+                self.restart_fine(k, &m);
+            }
+        }
+        let input: &[SatelliteObservation<f32>] = if usable { &fine_obs } else { &[] };
+        let step_now = usable || self.gyro.is_none();
+        if let (Some(mut f), true) = (self.fine.clone(), step_now) {
             let before = f.lock();
-            let input: &[SatelliteObservation<f32>] = if usable { &fine_obs } else { &[] };
             match f.step(input, &m, k) {
                 Ok(report) => {
-                    self.health.satellites_used = if usable { report.satellites } else { 0 };
+                    self.health.satellites_used = report.satellites;
                     let after = f.lock();
                     if after == LockStatus::Locked && before != LockStatus::Locked {
                         self.event(ReceiverEvent::FineLocked { epoch: k });
                     }
                     if usable && after == LockStatus::Locked {
-                        self.coast_start = Some((k, f.covariance()));
+                        self.coast_start = Some(Coast {
+                            epoch: k,
+                            q_rb: f.attitude(&m),
+                            covariance: f.covariance(),
+                            m,
+                        });
                     }
                     self.fine = Some(f);
                     if after == LockStatus::FalseLock && before != LockStatus::FalseLock {
@@ -576,6 +628,8 @@ impl AttitudeReceiver {
                     self.event(ReceiverEvent::Reanchored { epoch: k });
                 }
             }
+        } else {
+            self.health.satellites_used = 0;
         }
         self.health.fine_lock = self.fine.as_ref().map(FineStage::lock);
         self.health.coasting_s = self.fine.as_ref().map_or(0.0, |f| {
@@ -748,6 +802,7 @@ impl AttitudeReceiver {
                 let offset = phase - predicted; // = K if the window is clean
                 let nearest = libm::roundf(offset);
                 let clean = (offset - nearest).abs() < 0.2;
+                let dropped = s.dropped.get_mut(p);
                 match amb {
                     Some(kk) => {
                         let residual = offset - *kk as f32;
@@ -766,7 +821,24 @@ impl AttitudeReceiver {
                             }
                         }
                     }
-                    None if clean => *amb = Some(nearest as i32),
+                    None if clean => {
+                        *amb = Some(nearest as i32);
+                        // a window that dropped the integer because the counter jumped: the
+                        // re-fix tells whether whole cycles were lost
+                        if let Some(d) = dropped {
+                            if let Some(old) = d.take() {
+                                let cycles = (nearest as i32 - old).clamp(-127, 127) as i8;
+                                if cycles != 0 {
+                                    let _ = events.push(ReceiverEvent::CycleSlip {
+                                        epoch: k,
+                                        prn: w.prn,
+                                        antenna: (p + 1) as u8,
+                                        cycles,
+                                    });
+                                }
+                            }
+                        }
+                    }
                     None => {}
                 }
             }
@@ -830,12 +902,17 @@ impl AttitudeReceiver {
         };
         let half = 0.5 * cfg.window_s();
         let epoch = baseline_epoch(&a, &v, half);
+        // a gap (blocked antenna, too few satellites) leaves the filter behind the body: it
+        // has no gyro, so it starts again from the receiver's attitude
+        if self.rigid_last + u64::from(cfg.window_epochs) < k {
+            self.rigid = None;
+        }
         if self.rigid.is_none() {
-            let Some((s, m_s)) = self.snapshot else {
-                return;
-            };
             let m_now = self.gyro_attitude(k);
-            let q0 = s.q_rb * m_s.conjugate() * m_now;
+            let (q0, cov, source) = self.best_attitude(k, &m_now);
+            if source == AttitudeSource::None {
+                return;
+            }
             let rb_config = RigidBodyConfig {
                 dt: cfg.window_s(),
                 sigma_baseline: cfg.baseline_sigma_m,
@@ -845,13 +922,15 @@ impl AttitudeReceiver {
             let Ok(array) = BaselineArray::new(self.antennas) else {
                 return;
             };
-            let p0 = s.covariance + Matrix3::identity() * 1e-6;
+            let p0 = cov + Matrix3::identity() * 1e-6;
             self.rigid = RigidBodyFilter::new(&array, rb_config, &q0, &p0).ok();
+            self.rigid_last = k;
             return;
         }
         if let Some(r) = self.rigid.as_mut() {
             match r.step(&epoch) {
                 Ok(e) => {
+                    self.rigid_last = k;
                     self.rigid_estimate = Some(StageEstimate {
                         epoch: k,
                         q_rb: e.q_rb,

@@ -38,6 +38,11 @@ pub struct SatelliteAiding {
     pub los_rate: [f32; 3],
 }
 
+/// Largest mean square (cycles²) of a window's counter about its straight line for the window
+/// to count: (0.1 cycle)², about four times the per-epoch noise of a 38 dB-Hz single
+/// difference.
+const MAX_LINE_MS: f32 = 0.01;
+
 /// Smallest `|z|²` (noise units) of both antennas for an epoch to update a counter.
 const MIN_EPOCH_POWER: f32 = 4.0;
 
@@ -70,6 +75,8 @@ struct WindowSums {
     s_tt: f32,
     s_c: [f32; 2],
     s_tc: [f32; 2],
+    /// Σ c'² (for the residual of the straight line).
+    s_cc: [f32; 2],
     cn0_linear: f32,
     counter_ok: [bool; 2],
 }
@@ -172,6 +179,9 @@ pub(crate) struct Slot {
     pub rate: [f32; 2],
     /// Fixed ambiguities: `c − K` is the geometric SD.
     pub ambiguity: [Option<i32>; 2],
+    /// The ambiguity a window dropped because its counter jumped (a cycle slip suspected):
+    /// the re-fix is compared with it.
+    pub dropped: [Option<i32>; 2],
     /// Latest C/N0, dB-Hz.
     pub cn0_dbhz: f32,
     window: WindowSums,
@@ -191,6 +201,7 @@ impl Slot {
             counter_valid: [false; 2],
             rate: [0.0; 2],
             ambiguity: [None; 2],
+            dropped: [None; 2],
             cn0_dbhz: 0.0,
             window: WindowSums::default(),
             bits: BitMonitor::default(),
@@ -217,6 +228,9 @@ impl Slot {
             }
             if let Some(a) = self.ambiguity.get_mut(k) {
                 *a = None;
+            }
+            if let Some(d) = self.dropped.get_mut(k) {
+                *d = None;
             }
         }
     }
@@ -280,11 +294,15 @@ impl Slot {
             }
             let origin = w.origin.get(k).copied().unwrap_or(0.0);
             let rel = *c - origin;
-            if let (Some(sc), Some(stc), Some(ok)) =
-                (w.s_c.get_mut(k), w.s_tc.get_mut(k), w.counter_ok.get_mut(k))
-            {
+            if let (Some(sc), Some(stc), Some(scc), Some(ok)) = (
+                w.s_c.get_mut(k),
+                w.s_tc.get_mut(k),
+                w.s_cc.get_mut(k),
+                w.counter_ok.get_mut(k),
+            ) {
                 *sc += rel;
                 *stc += tau * rel;
+                *scc += rel * rel;
                 *ok &= *valid;
             }
         }
@@ -321,27 +339,32 @@ impl Slot {
         // the window's centre in τ: the centre epoch's offset
         let centre_tau = (config.window_epochs as f32 - 1.0) * 0.5;
         for k in 0..2 {
-            let (Some(p), Some(m), Some(sc), Some(stc), Some(origin), Some(ok)) = (
+            let (Some(p), Some(m), Some(sc), Some(stc), Some(scc), Some(origin), Some(ok)) = (
                 w.product.get(k),
                 w.magnitude.get(k),
                 w.s_c.get(k),
                 w.s_tc.get(k),
+                w.s_cc.get(k),
                 w.origin.get(k),
                 w.counter_ok.get(k),
             ) else {
                 continue;
             };
-            let slope_per_epoch = if s_tt > 0.0 {
-                (stc - w.s_t * sc / n) / s_tt
-            } else {
-                0.0
-            };
+            let s_tc = stc - w.s_t * sc / n;
+            let slope_per_epoch = if s_tt > 0.0 { s_tc / s_tt } else { 0.0 };
+            // mean square of the counter about its straight line: large when the counter ran
+            // on noise for part of the window (a satellite setting, a fade), whose slope would
+            // be garbage
+            let s_cc = scc - sc * sc / n;
+            let line_ms = ((s_cc - slope_per_epoch * s_tc) / n).max(0.0);
+            let straight = line_ms <= MAX_LINE_MS;
             let mean_c = origin + sc / n + slope_per_epoch * (centre_tau - mean_tau);
             let fraction = libm::atan2f(p.im, p.re) * (0.5 * core::f32::consts::FRAC_1_PI);
             let phase = fraction + libm::roundf(mean_c - fraction);
             // coherence: |Σ z z*| / Σ |z z*| is near 1 for a clean SD, near 1/√n for noise
             let coherent = *m > 0.0 && libm::sqrtf(p.norm_sqr()) >= 0.5 * m;
-            let valid = *ok && coherent && self.counter_valid.get(k).copied().unwrap_or(false);
+            let valid =
+                *ok && coherent && straight && self.counter_valid.get(k).copied().unwrap_or(false);
             let rate = slope_per_epoch / t;
             if let (Some(ph), Some(r), Some(v), Some(sr)) = (
                 out.phase.get_mut(k),
@@ -357,8 +380,12 @@ impl Slot {
                 }
             }
             if !valid {
-                // the counter can no longer be trusted to hold whole cycles
-                if let Some(a) = self.ambiguity.get_mut(k) {
+                // the counter can no longer be trusted to hold whole cycles; if it kept running
+                // on a coherent signal and only jumped, remember the integer (a slip suspected)
+                let running =
+                    *ok && coherent && self.counter_valid.get(k).copied().unwrap_or(false);
+                if let (Some(a), Some(d)) = (self.ambiguity.get_mut(k), self.dropped.get_mut(k)) {
+                    *d = if running { a.or(*d) } else { None };
                     *a = None;
                 }
             }

@@ -8,6 +8,7 @@
 
 pub mod bound;
 pub mod fast_path;
+pub mod files;
 pub mod metrics;
 pub mod run;
 pub mod world;
@@ -84,9 +85,13 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
     let record = fly(&config, Some(&bar))?;
     bar.finish_and_clear();
     let mut m = evaluate(&record, config.duration_s);
-    m.faults = Vec::new();
-    let wall = started.elapsed().as_secs_f64();
-    Ok(outcome(&m, wall))
+    m.faults = metrics::evaluate_faults(&record, &config.faults, 60.0);
+    let mut o = outcome(&m, started.elapsed().as_secs_f64());
+    if let Some(dir) = &ctx.out_dir {
+        let title = format!("microsat / {} / seed {}", ctx.variant, ctx.seed);
+        o.files = files::write_all(dir, &record, &m, &title, &o.summary)?;
+    }
+    Ok(o)
 }
 
 fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
@@ -137,6 +142,20 @@ fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
     o.summary.push(format!(
         "satellites tracked: mean {:.1}, min {}, max {}",
         m.tracked.0, m.tracked.1, m.tracked.2
+    ));
+    for f in &m.faults {
+        o.summary.push(format!(
+            "fault {:<36} detected {:<5} recovered {:>7} s  {}",
+            f.name,
+            f.detected,
+            f.recovered_s.map_or("never".into(), |r| format!("{r:.2}")),
+            f.detail
+        ));
+    }
+    o.summary.push(format!(
+        "gyro bias estimate − truth at the end: {:.1}/{:.1}/{:.1} °/h (truth {:.1}/{:.1}/{:.1} °/h)",
+        m.gyro_bias_error.x, m.gyro_bias_error.y, m.gyro_bias_error.z,
+        m.gyro_bias_truth.x, m.gyro_bias_truth.y, m.gyro_bias_truth.z
     ));
     o.summary.push(format!("wall time {wall_s:.1} s"));
     let _ = json!({});

@@ -2,9 +2,9 @@
 //! statistics of the sample-level chain, one 1 ms epoch at a time.
 //!
 //! For satellite `i` and antenna `P` the prompt is
-//! `Z_P = A_P d e^{j(φ + ψ_P + b_P + s_P)} + n`, with `A_P = √(2 q_T) σ` (`q_T = (C/N0)_P T`, zero
+//! `Z_P = A_P d e^{j(φ + ψ_P − ψ_A + b_P − b_A + s_P)} + n`, with `A_P = √(2 q_T) σ` (`q_T = (C/N0)_P T`, zero
 //! where the antenna does not see the satellite), `d` the data bit, `φ` the reference loop's
-//! phase error (white, `σ_φ² = B_L/(C/N0)`, a 15 Hz PLL), `ψ_P` the geometric phase of eq. (4),
+//! phase error (the loop tracks antenna A's carrier, so A's prompt sits on I) (white, `σ_φ² = B_L/(C/N0)`, a 15 Hz PLL), `ψ_P` the geometric phase of eq. (4),
 //! `b_P` the line bias, `s_P` an injected phase transient, and `n` complex Gaussian with `σ`
 //! per component. This is what the crate's correlator returns once its loops track (the
 //! `signal` scenario measures the chain's inter-antenna phase noise within 2–8 % of this
@@ -127,6 +127,11 @@ impl EmulatedChannel {
         self.state = ChannelState::Tracking;
     }
 
+    /// The C/N0 the channel reports (its 1 s estimate), dB-Hz.
+    pub fn reported_cn0_dbhz(&self) -> f64 {
+        self.cn0_estimate
+    }
+
     /// Whether the channel delivers an observation now.
     pub fn delivering(&self) -> bool {
         matches!(
@@ -187,7 +192,8 @@ impl EmulatedChannel {
                     transient += std::f64::consts::TAU * tr.cycles * frac;
                 }
             }
-            let theta = phi + psi[p] + line_bias[p] + transient;
+            // the reference loop tracks antenna A's carrier: its prompt sits on I (± the bit)
+            let theta = phi + (psi[p] - psi[0]) + (line_bias[p] - line_bias[0]) + transient;
             let ni: f64 = StandardNormal.sample(rng);
             let nq: f64 = StandardNormal.sample(rng);
             prompt.i[p] = (amplitude * d * theta.cos() + NOISE_SIGMA * ni) as f32;

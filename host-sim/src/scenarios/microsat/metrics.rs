@@ -66,6 +66,10 @@ pub struct FlightMetrics {
     pub tracked: (f64, usize, usize),
     /// Faults.
     pub faults: Vec<FaultOutcome>,
+    /// Gyro bias estimate minus truth at the end, °/h.
+    pub gyro_bias_error: Vector3<f64>,
+    /// True gyro bias at the end, °/h.
+    pub gyro_bias_truth: Vector3<f64>,
 }
 
 fn rms_max<'a>(
@@ -192,6 +196,9 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
         availability,
         tracked,
         faults: Vec::new(),
+        gyro_bias_error: (record.gyro_bias.1 - record.gyro_bias.0)
+            * (180.0 / std::f64::consts::PI * 3600.0),
+        gyro_bias_truth: record.gyro_bias.0 * (180.0 / std::f64::consts::PI * 3600.0),
     }
 }
 
@@ -216,4 +223,177 @@ pub fn faults_json(faults: &[FaultOutcome]) -> Value {
             })
             .collect(),
     )
+}
+
+/// First time `≥ from` after which the receiver's attitude comes from the fine filter with its
+/// error inside 3σ on every axis for at least `hold` seconds; seconds after `from`.
+pub fn attitude_recovery(samples: &[Sample], from: f64, hold: f64) -> Option<f64> {
+    let ok = |s: &Sample| {
+        s.source == AttitudeSource::OneStage
+            && (0..3).all(|a| s.error[a].abs() <= 3.0 * s.sigma[a].max(1e-9))
+    };
+    let mut start: Option<f64> = None;
+    for s in samples.iter().filter(|s| s.t >= from) {
+        if ok(s) {
+            let t0 = *start.get_or_insert(s.t);
+            if s.t - t0 >= hold {
+                return Some(t0 - from);
+            }
+        } else {
+            start = None;
+        }
+    }
+    None
+}
+
+/// The outcome of every injected or natural fault of the flight.
+pub fn evaluate_faults(
+    record: &FlightRecord,
+    plan: &super::run::FaultPlan,
+    after_s: f64,
+) -> Vec<FaultOutcome> {
+    let mut out = Vec::new();
+    let samples = &record.samples;
+    let find = |from: f64, to: f64, pred: &dyn Fn(&ReceiverEvent) -> bool| {
+        record
+            .events
+            .iter()
+            .find(|(t, e)| *t >= from && *t <= to && pred(e))
+            .map(|(t, _)| *t)
+    };
+    // a satellite setting and one rising (natural, the first after `after_s`)
+    if let Some(&(ts, prn, _)) = record
+        .horizon
+        .iter()
+        .find(|(t, _, rises)| *t > after_s && !rises)
+    {
+        let lost = find(
+            ts - 0.2,
+            ts + 3.0,
+            &|e| matches!(e, ReceiverEvent::SatelliteLost { prn: p, .. } if *p == prn),
+        );
+        let att = attitude_recovery(samples, ts, 1.0);
+        out.push(FaultOutcome {
+            name: "satellite setting".into(),
+            detected: lost.is_some(),
+            recovered_s: lost.zip(att).map(|(l, a)| (l - ts).max(a)),
+            at_s: ts,
+            detail: format!(
+                "PRN {prn} set below the 10° mask at {ts:.1} s; channel lost and slot released {} s later; fine attitude within 3σ after {} s",
+                lost.map_or("never".into(), |l| format!("{:.2}", l - ts)),
+                att.map_or("never".into(), |a| format!("{a:.1}"))
+            ),
+        });
+    }
+    if let Some(&(tr, prn, _)) = record
+        .horizon
+        .iter()
+        .find(|(t, _, rises)| *t > after_s && *rises)
+    {
+        let acquired = find(
+            tr,
+            tr + 10.0,
+            &|e| matches!(e, ReceiverEvent::SatelliteAcquired { prn: p, .. } if *p == prn),
+        );
+        let fixed = find(
+            tr,
+            tr + 20.0,
+            &|e| matches!(e, ReceiverEvent::AmbiguityFixed { prn: p, .. } if *p == prn),
+        );
+        out.push(FaultOutcome {
+            name: "satellite rising".into(),
+            detected: acquired.is_some(),
+            recovered_s: fixed.map(|f| f - tr),
+            at_s: tr,
+            detail: format!(
+                "PRN {prn} rose above the mask at {tr:.1} s; first observation {} s later, ambiguities fixed from the fine attitude (satellite in every stage) {} s later",
+                acquired.map_or("never".into(), |a| format!("{:.2}", a - tr)),
+                fixed.map_or("never".into(), |f| format!("{:.2}", f - tr))
+            ),
+        });
+    }
+    for b in &plan.blockages {
+        let antenna = b.antenna as u8;
+        let blocked = find(
+            b.start,
+            b.start + 1.0,
+            &|e| matches!(e, ReceiverEvent::AntennaBlocked { antenna: a, .. } if *a == antenna),
+        );
+        let restored = find(
+            b.end,
+            b.end + 5.0,
+            &|e| matches!(e, ReceiverEvent::AntennaRestored { antenna: a, .. } if *a == antenna),
+        );
+        let att = attitude_recovery(samples, b.end, 1.0);
+        let coast: Vec<&Sample> = samples
+            .iter()
+            .filter(|s| s.t >= b.start && s.t < b.end)
+            .collect();
+        let worst = coast
+            .iter()
+            .map(|s| s.error.amax())
+            .fold(0.0f64, f64::max)
+            .to_degrees();
+        out.push(FaultOutcome {
+            name: format!("antenna {} blocked for {:.0} s", ["A", "B", "C"][b.antenna.min(2)], b.end - b.start),
+            detected: blocked.is_some(),
+            recovered_s: restored.zip(att).map(|(r, a)| (r - b.end).max(a)),
+            at_s: b.start,
+            detail: format!(
+                "detected {} ms after the start (signal power); gyro coast, largest error {worst:.4}°; restored {} s after the end; fine attitude within 3σ after {} s",
+                blocked.map_or("never".into(), |t| format!("{:.0}", (t - b.start) * 1e3)),
+                restored.map_or("never".into(), |t| format!("{:.2}", t - b.end)),
+                att.map_or("never".into(), |a| format!("{a:.1}"))
+            ),
+        });
+    }
+    if let (Some((ts, antenna)), Some(prn)) = (plan.cycle_slip, record.fault_prns.0) {
+        let slip = record
+            .events
+            .iter()
+            .find(|(t, e)| {
+                *t >= ts
+                    && *t <= ts + 3.0
+                    && matches!(e, ReceiverEvent::CycleSlip { prn: p, antenna: a, .. } if *p == prn && usize::from(*a) == antenna)
+            })
+            .copied();
+        let att = attitude_recovery(samples, ts, 1.0);
+        out.push(FaultOutcome {
+            name: "cycle slip".into(),
+            detected: slip.is_some(),
+            recovered_s: slip.map(|(t, _)| t - ts).zip(att).map(|(s, a)| s.max(a)),
+            at_s: ts,
+            detail: format!(
+                "PRN {prn}, antenna {}: phase turned by one cycle in 4 ms; {}",
+                ["A", "B", "C"][antenna.min(2)],
+                match slip {
+                    Some((t, ReceiverEvent::CycleSlip { cycles, .. })) => format!(
+                        "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
+                        t - ts
+                    ),
+                    _ => "not detected".into(),
+                }
+            ),
+        });
+    }
+    if let (Some(tf), Some(prn)) = (plan.bit_flip, record.fault_prns.1) {
+        let seen = find(
+            tf,
+            tf + 0.1,
+            &|e| matches!(e, ReceiverEvent::BitAnomaly { prn: p, .. } if *p == prn),
+        );
+        let att = attitude_recovery(samples, tf, 1.0);
+        out.push(FaultOutcome {
+            name: "data-bit flip at the wrong moment".into(),
+            detected: seen.is_some(),
+            recovered_s: att,
+            at_s: tf,
+            detail: format!(
+                "PRN {prn}: bit transition {:.1} ms into a code period, away from the bit edges; {}; the fine filter averages the bit out of every epoch",
+                ((tf * 1e3) % 1.0) * 1.0,
+                seen.map_or("not flagged".into(), |t| format!("flagged {:.0} ms later", (t - tf) * 1e3))
+            ),
+        });
+    }
+    out
 }

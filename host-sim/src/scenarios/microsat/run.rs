@@ -136,6 +136,8 @@ pub struct FlightRecord {
     pub fault_prns: (Option<u8>, Option<u8>),
     /// The true gyro biases at the end, rad/s, and the estimate.
     pub gyro_bias: (Vector3<f64>, Vector3<f64>),
+    /// The receiver's gyro calibration report at the end.
+    pub calibration: Option<gnss_attitude::receiver::CalibrationReport>,
     /// Wall time of the sample-level part and of the fast path, s.
     pub wall_s: (f64, f64),
 }
@@ -355,14 +357,16 @@ pub fn fly(
             }
             if (k + 1) % 1000 == 0 {
                 for s in &truths {
-                    let delivering = channels.get(&s.view.prn).is_some_and(|c| c.delivering());
+                    let ch = channels.get(&s.view.prn);
+                    let delivering = ch.is_some_and(|c| c.delivering());
+                    let reported = ch.map_or(0.0, |c| c.reported_cn0_dbhz());
                     if s.elevation[0] > 0.0 {
                         record.sky.push(SkyPoint {
                             t: tc,
                             prn: s.view.prn,
                             azimuth: s.azimuth,
                             elevation: s.elevation[0],
-                            cn0_dbhz: if delivering { s.cn0_dbhz[0] } else { 0.0 },
+                            cn0_dbhz: if delivering { reported } else { 0.0 },
                             tracked: delivering,
                         });
                     }
@@ -374,6 +378,7 @@ pub fn fly(
         }
     }
     record.wall_s.1 = started.elapsed().as_secs_f64();
+    record.calibration = receiver.gyro_calibration();
     let b = gyro.current_errors();
     let est = receiver.gyro_bias();
     record.gyro_bias = (
