@@ -76,7 +76,8 @@ pub struct ReceiverConfig {
     pub min_cold_start_satellites: u8,
     /// Satellites needed for a fine-filter update (fewer: the filter only predicts).
     pub min_fine_satellites: u8,
-    /// Prior standard deviation of the fine filter's angular rates, rad/s.
+    /// Prior standard deviation of the fine filter's angular rates, rad/s: the gyro's rate
+    /// errors when it runs in the gyro frame, the body's rates without a gyro.
     pub prior_rate_sigma: f32,
     /// A fixed single difference whose residual against the fine attitude exceeds this (cycles)
     /// is a cycle slip; the slip is repaired by the nearest integer.
@@ -117,7 +118,8 @@ impl ReceiverConfig {
             ambiguity,
             min_cold_start_satellites: 5,
             min_fine_satellites: 2,
-            prior_rate_sigma: 2e-3,
+            // in the gyro frame the rates are the gyro's errors; without a gyro, the body's
+            prior_rate_sigma: if gyro.is_some() { 2e-3 } else { 0.05 },
             slip_threshold_cycles: 0.3,
             reanchor_angle_rad: 0.2,
             blocked_power_ratio: 0.2,

@@ -79,6 +79,7 @@
 mod antenna;
 mod carrier;
 mod config;
+pub mod example;
 pub mod fine;
 pub mod gyro_frame;
 mod output;
