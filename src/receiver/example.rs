@@ -189,8 +189,10 @@ impl ExampleFlight {
             if k % 100 == 0 {
                 receiver.set_aiding(&self.aiding(k))?;
             }
-            if receiver.config().gyro.is_some() && k > 0 && k % per_gyro == 0 {
-                receiver.push_gyro_increment(&self.gyro_increment(k / per_gyro - 1))?;
+            if receiver.config().gyro.is_some() && k > 0 && k.checked_rem(per_gyro) == Some(0) {
+                receiver.push_gyro_increment(
+                    &self.gyro_increment(k.checked_div(per_gyro).unwrap_or(1) - 1),
+                )?;
             }
             for o in self.observations(k).iter() {
                 receiver.push_observation(k, o)?;

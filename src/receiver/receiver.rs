@@ -184,7 +184,8 @@ impl AttitudeReceiver {
             }
         }
         self.slots = slots;
-        for prn in lost {
+        // (by reference: a by-value heapless iterator keeps a bounds check in its drop)
+        for &prn in lost.iter() {
             self.event(ReceiverEvent::SatelliteLost { epoch, prn });
         }
         Ok(())
@@ -486,7 +487,7 @@ impl AttitudeReceiver {
         // samples per window: a whole number of steps (checked by the configuration)
         let per_window =
             libm::round(seconds(self.config.window_s()) / seconds(g.config.sample_interval_s));
-        if !(per_window >= 1.0) || g.samples() % (per_window as u64) != 0 {
+        if !(per_window >= 1.0) || g.samples().checked_rem(per_window as u64) != Some(0) {
             return;
         }
         let Some(f) = &self.fine else {
@@ -636,12 +637,15 @@ impl AttitudeReceiver {
             k.saturating_sub(f.last_update) as f32 * cfg.epoch_s
         });
         self.closed = Some(k);
-        if (k + 1) % u64::from(cfg.window_epochs) == 0 {
+        if (k + 1).checked_rem(u64::from(cfg.window_epochs)) == Some(0) {
             self.close_window(k, &m);
         }
     }
 
     /// Restarts the fine filter from the best attitude available (or drops it).
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
     fn restart_fine(&mut self, k: u64, m: &Quaternion<f32>) {
         let (q, cov, source) = self.best_attitude(k, m);
         let rates = self
@@ -659,6 +663,9 @@ impl AttitudeReceiver {
     }
 
     /// The window that ends with epoch `k`.
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
     fn close_window(&mut self, k: u64, m_now: &Quaternion<f32>) {
         let cfg = self.config;
         self.windows += 1;
@@ -676,7 +683,7 @@ impl AttitudeReceiver {
                 *s = Slot::new(s.aiding);
             }
         }
-        for prn in lost {
+        for &prn in lost.iter() {
             self.event(ReceiverEvent::SatelliteLost { epoch: k, prn });
         }
         self.health.satellites_tracked = windows.len() as u8;
@@ -685,7 +692,7 @@ impl AttitudeReceiver {
             self.try_cold_start(k, centre, &windows, &m_centre, m_now);
         } else {
             self.maintain_ambiguities(k, &windows, &m_centre, m_now);
-            if self.windows % u64::from(cfg.snapshot_windows) == 0 {
+            if self.windows.checked_rem(u64::from(cfg.snapshot_windows)) == Some(0) {
                 self.run_snapshot(centre, &windows, &m_centre);
             }
             self.run_rigid_body(k, &windows);
@@ -697,6 +704,9 @@ impl AttitudeReceiver {
             .count() as u8;
     }
 
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
     fn try_cold_start(
         &mut self,
         k: u64,
@@ -767,6 +777,9 @@ impl AttitudeReceiver {
         ))
     }
 
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
     fn maintain_ambiguities(
         &mut self,
         k: u64,
@@ -849,7 +862,7 @@ impl AttitudeReceiver {
                 });
             }
         }
-        for e in events {
+        for &e in events.iter() {
             self.event(e);
         }
     }
@@ -870,6 +883,9 @@ impl AttitudeReceiver {
         out
     }
 
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
     fn run_snapshot(&mut self, centre: u64, windows: &[Windowed], m_centre: &Quaternion<f32>) {
         let fixed = self.fixed_windows(windows);
         let mut pairs = Vec::<(WindowSd, [i32; 2]), MAX_SATELLITES>::new();
@@ -891,6 +907,9 @@ impl AttitudeReceiver {
         }
     }
 
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
     fn run_rigid_body(&mut self, k: u64, windows: &[Windowed]) {
         let cfg = self.config;
         let fixed = self.fixed_windows(windows);

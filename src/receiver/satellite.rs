@@ -248,7 +248,7 @@ impl Slot {
         blocked: &[bool; 3],
     ) -> bool {
         let [za, zb, zc] = *z;
-        let tau = (epoch % u64::from(window_epochs)) as f32;
+        let tau = epoch.checked_rem(u64::from(window_epochs)).unwrap_or(0) as f32;
         let w = &mut self.window;
         if w.epochs == 0 {
             *w = WindowSums::default();
