@@ -18,6 +18,12 @@ use super::MAX_SATELLITES;
 /// One satellite's window with the index of its slot.
 pub(crate) type Windowed = (usize, WindowSd);
 
+/// The integers of the cold start: per satellite its slot and `K` of B and C.
+pub(crate) type FixedSlots = heapless::Vec<(usize, [i32; 2]), MAX_SATELLITES>;
+
+/// `a_B`, `a_C` (m) and their rates (m/s), reference frame.
+pub(crate) type BaselinesAndRates = ([Vector3<f32>; 2], [Vector3<f32>; 2]);
+
 /// The body baselines `A→B`, `A→C`, m.
 pub(crate) fn body_baselines(antennas: &[Vector3<f32>; 3]) -> [Vector3<f32>; 2] {
     let [a, b, c] = antennas;
@@ -31,10 +37,7 @@ pub(crate) fn cold_start(
     resolver: &AmbiguityResolver<2, f32>,
     windows: &[Windowed],
     sigma_ref_cycles: f32,
-) -> Option<(
-    SnapshotSolution<f32>,
-    heapless::Vec<(usize, [i32; 2]), MAX_SATELLITES>,
-)> {
+) -> Option<(SnapshotSolution<f32>, FixedSlots)> {
     let mut obs = PhaseObservations::<2, MAX_SATELLITES, f32>::new();
     let mut slots = heapless::Vec::<usize, MAX_SATELLITES>::new();
     for (slot, w) in windows.iter().filter(|(_, w)| w.valid == [true, true]) {
@@ -104,7 +107,7 @@ pub(crate) fn predicted_sd(
 pub(crate) fn baselines_and_velocities(
     fixed: &[(WindowSd, [i32; 2], Vector3<f32>)],
     wavelength_m: f32,
-) -> Option<([Vector3<f32>; 2], [Vector3<f32>; 2])> {
+) -> Option<BaselinesAndRates> {
     let weights = fixed
         .iter()
         .map(|(w, _, _)| (w.los, 1.0 / (w.sigma_cycles * w.sigma_cycles).max(1e-10)));

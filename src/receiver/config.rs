@@ -188,7 +188,7 @@ impl ReceiverConfig {
                 && g.calibration_max_sigma > 0.0;
             // the window must end on a propagation step (2h)
             let steps = self.window_s() / (2.0 * h);
-            if !ok || !((steps - libm::roundf(steps)).abs() < 1e-3 && steps >= 1.0) {
+            if !(ok && (steps - libm::roundf(steps)).abs() < 1e-3 && steps >= 1.0) {
                 return Err(ReceiverError::InvalidConfig);
             }
         }

@@ -62,7 +62,7 @@
 //! # Faults
 //!
 //! Satellites that set stop delivering epochs and lose their slot; rising ones are fixed from
-//! the fine attitude. A blocked antenna ([`antenna`]) is detected from its signal power within
+//! the fine attitude. A blocked antenna is detected from its signal power within
 //! tens of milliseconds and left out: the fine filter predicts and the gyro carries the
 //! attitude; when the antenna returns its single differences are re-fixed from the attitude.
 //! Cycle slips are repaired as above. The data-bit monitor flags a sign change of the
