@@ -83,11 +83,16 @@ struct WindowSums {
 
 /// Data-bit edge monitor on the reference antenna's prompt: learns where the sign of `I_A`
 /// changes (every 20 ms at the bit edges) and flags a change elsewhere.
+///
+/// Only epochs with `|I_A| > 3σ` count. A sign change between two such epochs at most
+/// [`BIT_GAP`] epochs apart happened somewhere between them: if none of those positions is the
+/// learned edge (or its neighbours), it is an anomaly; a change between consecutive epochs at
+/// the edge teaches the histogram.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct BitMonitor {
     histogram: [f32; 20],
     last_i: f32,
-    has_last: bool,
+    last_epoch: Option<u64>,
 }
 
 impl Default for BitMonitor {
@@ -95,7 +100,7 @@ impl Default for BitMonitor {
         Self {
             histogram: [0.0; 20],
             last_i: 0.0,
-            has_last: false,
+            last_epoch: None,
         }
     }
 }
@@ -103,41 +108,43 @@ impl Default for BitMonitor {
 /// Smallest `|I_A|` (noise units) on both sides of a sign change for the monitor to count it.
 const BIT_SIGN_LEVEL: f32 = 3.0;
 
+/// Largest gap (epochs) between the two strong epochs of a sign change the monitor judges.
+const BIT_GAP: u64 = 3;
+
 impl BitMonitor {
     /// Takes the reference prompt's I (noise units) of `epoch`; true when the sign changed at a
     /// position that is not the learned bit edge.
     fn update(&mut self, epoch: u64, i_a: f32) -> bool {
+        if !(i_a.abs() > BIT_SIGN_LEVEL) {
+            return false;
+        }
         let mut anomaly = false;
-        if self.has_last
-            && self.last_i.abs() > BIT_SIGN_LEVEL
-            && i_a.abs() > BIT_SIGN_LEVEL
-            && (self.last_i > 0.0) != (i_a > 0.0)
-        {
-            let position = (epoch % 20) as usize;
-            let (best, best_count, second) = self.peak();
-            let learned = best_count >= 8.0 && best_count >= 4.0 * second;
-            let near = |p: usize| {
-                let d = (p + 20 - best) % 20;
-                d == 0 || d == 1 || d == 19
-            };
-            if learned && !near(position) {
-                anomaly = true;
-            } else {
-                // forget slowly: the edges drift against the receiver's epochs with Doppler
-                for h in self.histogram.iter_mut() {
-                    *h *= 0.97;
-                }
-                if let Some(h) = self.histogram.get_mut(position) {
-                    *h += 1.0;
+        if let Some(last) = self.last_epoch {
+            let gap = epoch.saturating_sub(last);
+            if gap >= 1 && gap <= BIT_GAP && (self.last_i > 0.0) != (i_a > 0.0) {
+                let (best, best_count, second) = self.peak();
+                let learned = best_count >= 8.0 && best_count >= 4.0 * second;
+                let near = |p: u64| {
+                    let d = (p + 20 - best as u64) % 20;
+                    d == 0 || d == 1 || d == 19
+                };
+                // the change happened at one of the epochs last + 1 ..= epoch
+                let at_edge = (last + 1..=epoch).any(|e| near(e % 20));
+                if learned && !at_edge {
+                    anomaly = true;
+                } else if gap == 1 {
+                    // forget slowly: the edges drift against the receiver's epochs with Doppler
+                    for h in self.histogram.iter_mut() {
+                        *h *= 0.97;
+                    }
+                    if let Some(h) = self.histogram.get_mut((epoch % 20) as usize) {
+                        *h += 1.0;
+                    }
                 }
             }
         }
-        if i_a.abs() > BIT_SIGN_LEVEL {
-            self.last_i = i_a;
-            self.has_last = true;
-        } else {
-            self.has_last = false;
-        }
+        self.last_i = i_a;
+        self.last_epoch = Some(epoch);
         anomaly
     }
 

@@ -106,14 +106,14 @@ fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
         .metric("wall_time_s", wall_s);
     o.paper = Value::Null;
     o.summary.push(format!(
-        "{:<34} {:>8} {:>26} {:>26} {:>7}",
-        "stage", "first s", "RMS error x/y/z (deg)", "max error x/y/z (deg)", "avail"
+        "{:<34} {:>8} {:>26} {:>26} {:>7} {:>5}",
+        "stage", "first s", "RMS error x/y/z (deg)", "max error x/y/z (deg)", "avail", "sats"
     ));
     let row = |s: &metrics::StageStats| {
         let d = deg(&s.rms);
         let x = deg(&s.max);
         format!(
-            "{:<34} {:>8.2} {:>8.4}/{:>8.4}/{:>8.4} {:>8.4}/{:>8.4}/{:>8.4} {:>7.3}",
+            "{:<34} {:>8.2} {:>8.4}/{:>8.4}/{:>8.4} {:>8.4}/{:>8.4}/{:>8.4} {:>7.3} {:>5.1}",
             s.name,
             s.first_s.unwrap_or(f64::NAN),
             d[0],
@@ -122,7 +122,8 @@ fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
             x[0],
             x[1],
             x[2],
-            s.availability
+            s.availability,
+            s.satellites
         )
     };
     for s in &m.stages {

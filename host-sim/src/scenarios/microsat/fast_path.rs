@@ -127,6 +127,18 @@ impl EmulatedChannel {
         self.state = ChannelState::Tracking;
     }
 
+    /// Schedules a data-bit transition at the wrong moment: half a bit after the channel's
+    /// first bit edge at or after `after` (s), 0.7 ms into that code period; returns its time.
+    pub fn schedule_bit_flip(&mut self, after: f64) -> f64 {
+        let k0 = (after / EPOCH_S).ceil() as u64;
+        let edge = (k0..k0 + 20)
+            .find(|k| (k + 20 - self.bit_offset) % 20 == 0)
+            .unwrap_or(k0);
+        let t = (edge + 10) as f64 * EPOCH_S + 0.7e-3;
+        self.bit_flip_at = Some(t);
+        t
+    }
+
     /// The C/N0 the channel reports (its 1 s estimate), dB-Hz.
     pub fn reported_cn0_dbhz(&self) -> f64 {
         self.cn0_estimate

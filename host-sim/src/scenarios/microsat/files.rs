@@ -368,14 +368,14 @@ fn markdown(record: &FlightRecord, m: &FlightMetrics, title: &str, summary: &[St
         "Time to first fix {:.2} s; fine attitude locked at {:.2} s; converged from {:.1} s.\n",
         m.ttff_s, m.fine_lock_s, m.converged_from_s
     );
-    let _ = writeln!(s, "| stage | first output, s | RMS error x / y / z, deg | max error x / y / z, deg | availability |");
-    let _ = writeln!(s, "|---|---|---|---|---|");
+    let _ = writeln!(s, "| stage | first output, s | RMS error x / y / z, deg | max error x / y / z, deg | availability | satellites |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
     for st in m.stages.iter().chain(std::iter::once(&m.receiver)) {
         let r = deg(&st.rms);
         let x = deg(&st.max);
         let _ = writeln!(
             s,
-            "| {} | {:.2} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:.3} |",
+            "| {} | {:.2} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:.3} | {:.1} |",
             st.name,
             st.first_s.unwrap_or(f64::NAN),
             r[0],
@@ -384,7 +384,8 @@ fn markdown(record: &FlightRecord, m: &FlightMetrics, title: &str, summary: &[St
             x[0],
             x[1],
             x[2],
-            st.availability
+            st.availability,
+            st.satellites
         );
     }
     let b = deg(&m.bound);

@@ -28,6 +28,8 @@ pub struct StageStats {
     pub availability: f64,
     /// Samples in the statistics.
     pub count: usize,
+    /// Mean number of satellites the stage used.
+    pub satellites: f64,
 }
 
 /// One injected fault's outcome.
@@ -105,6 +107,7 @@ fn stage_stats(
         sigma_rms,
         availability: (samples.len() as f64 * interval / duration).min(1.0),
         count,
+        satellites: f64::NAN,
     }
 }
 
@@ -136,6 +139,7 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
         sigma_rms,
         availability,
         count,
+        satellites: f64::NAN,
     };
     // the fine filter: locked samples after convergence
     let fine_samples: Vec<StageSample> = samples
@@ -177,6 +181,27 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
         stage_stats("gyro coast", &coast, 0.0, duration, 0.1),
     ];
     let after_fix: Vec<&Sample> = samples.iter().filter(|s| s.t >= ttff).collect();
+    let mean = |f: &dyn Fn(&Sample) -> Option<f64>| {
+        let v: Vec<f64> = after_fix.iter().filter_map(|s| f(s)).collect();
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    let mut stages = stages;
+    let fixed = mean(&|s| Some(s.fixed as f64));
+    if let Some(st) = stages.get_mut(0) {
+        st.satellites = fixed;
+    }
+    if let Some(st) = stages.get_mut(1) {
+        st.satellites = mean(&|s| (s.fine_locked && s.used > 0).then_some(s.used as f64));
+    }
+    if let Some(st) = stages.get_mut(2) {
+        st.satellites = fixed;
+    }
+    let mut receiver = receiver;
+    receiver.satellites = mean(&|s| Some(s.tracked as f64));
     let tracked = if after_fix.is_empty() {
         (0.0, 0, 0)
     } else {
@@ -376,7 +401,7 @@ pub fn evaluate_faults(
             ),
         });
     }
-    if let (Some(tf), Some(prn)) = (plan.bit_flip, record.fault_prns.1) {
+    if let (Some(tf), Some(prn)) = (record.bit_flip_s.or(plan.bit_flip), record.fault_prns.1) {
         let seen = find(
             tf,
             tf + 0.1,
@@ -389,8 +414,8 @@ pub fn evaluate_faults(
             recovered_s: att,
             at_s: tf,
             detail: format!(
-                "PRN {prn}: bit transition {:.1} ms into a code period, away from the bit edges; {}; the fine filter averages the bit out of every epoch",
-                ((tf * 1e3) % 1.0) * 1.0,
+                "PRN {prn}: bit transition half a bit after an edge, {:.1} ms into a code period; {}; the fine filter averages the bit out of every epoch",
+                (tf * 1e3) % 1.0,
                 seen.map_or("not flagged".into(), |t| format!("flagged {:.0} ms later", (t - tf) * 1e3))
             ),
         });

@@ -132,6 +132,8 @@ pub struct FlightRecord {
     pub sky: Vec<SkyPoint>,
     /// Truth: (time, PRN, rises) when a satellite crosses the reference antenna's mask.
     pub horizon: Vec<(f64, u8, bool)>,
+    /// When the data-bit flip was injected (mid-bit of its satellite), s.
+    pub bit_flip_s: Option<f64>,
     /// The PRN the cycle slip and bit flip were injected on.
     pub fault_prns: (Option<u8>, Option<u8>),
     /// The true gyro biases at the end, rad/s, and the estimate.
@@ -274,7 +276,7 @@ pub fn fly(
                 if t0 + AIDING_S >= tf && t0 <= tf {
                     if let Some(best) = highest(&truths) {
                         if let Some(ch) = channels.get_mut(&best) {
-                            ch.bit_flip_at = Some(tf);
+                            record.bit_flip_s = Some(ch.schedule_bit_flip(tf));
                         }
                         record.fault_prns.1 = Some(best);
                     }
