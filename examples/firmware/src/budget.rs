@@ -10,7 +10,8 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_semihosting::hprintln;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::selftest::ConstantVelocityModel;
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::multi_structure::MultiStructureFilter;
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
@@ -20,7 +21,7 @@ use gnss_attitude::gyro::{
     NormalEquations, PaperCalibrator, SqrtInformation,
 };
 use gnss_attitude::attitude::one_stage::{
-    AntennaArray as OneStageArray, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
+    EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
     PromptIq, SatelliteObservation, MAX_SATELLITES,
 };
 use gnss_attitude::geometry::Paper003Angles;
@@ -343,7 +344,7 @@ fn gyro_budgets() {
 /// `n ≤ 12` satellites spread over the sky with noise-free-plus-wobble prompt outputs at
 /// 40 dB-Hz (the bench's data), on the stack.
 fn one_stage_observations(
-    array: &OneStageArray<f32>,
+    array: &AntennaArray<f32>,
 ) -> [SatelliteObservation<f32>; MAX_SATELLITES] {
     let truth = Paper003Angles::new(0.001, -0.002, 0.0015);
     let model = PhaseModel::new(array, 0.190_293_7, &truth);
@@ -371,7 +372,7 @@ fn one_stage_observations(
 }
 
 fn one_stage_budgets() {
-    let Ok(array) = OneStageArray::paper_triangle(1.5f32) else { return };
+    let Ok(array) = AntennaArray::paper_triangle(1.5f32) else { return };
     let obs = one_stage_observations(&array);
     one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, Gaussian approx., 3 angles + 2 biases (N = 8)", FilterMode::GaussianApproximation, EstimatedAngles::ALL, true, MAX_SATELLITES);
     one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, constant gain, 3 angles + 2 biases (N = 8)", FilterMode::ConstantGain, EstimatedAngles::ALL, true, MAX_SATELLITES);
@@ -381,7 +382,7 @@ fn one_stage_budgets() {
 
 #[allow(clippy::too_many_arguments)]
 fn one_stage_budget<const N: usize>(
-    array: &OneStageArray<f32>,
+    array: &AntennaArray<f32>,
     obs: &[SatelliteObservation<f32>; MAX_SATELLITES],
     name: &str,
     mode: FilterMode,

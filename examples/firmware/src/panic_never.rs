@@ -13,7 +13,8 @@ use cortex_m_rt::entry;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
 use gnss_attitude::selftest::run_ekf_self_test;
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch};
+use gnss_attitude::attitude::array::AntennaArray;
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use gnss_attitude::attitude::multi_structure::{fuse, MultiStructureFilter};
@@ -24,7 +25,7 @@ use gnss_attitude::gyro::{
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
 };
 use gnss_attitude::attitude::one_stage::{
-    satellite_terms, AntennaArray as OneStageArray, BesselRatio, FilterMode, OneStageConfig, OneStageFilter, Prior,
+    satellite_terms, BesselRatio, FilterMode, OneStageConfig, OneStageFilter, Prior,
     SatelliteObservation, MAX_SATELLITES,
 };
 use gnss_attitude::frontend::nt1065::{Nt1065, Nt1065Config};
@@ -222,7 +223,7 @@ fn one_stage() {
     let _ = black_box(BesselRatio::at(black_box(61.0f32)));
     let z = black_box([nalgebra::Complex::new(1.0f32, 2.0); 3]);
     let _ = black_box(satellite_terms(&z, &v(), black_box(10.0)));
-    let Ok(array) = OneStageArray::new(v(), v() * 2.0, v() + nalgebra::Vector3::x()) else {
+    let Ok(array) = AntennaArray::new([v(), v() * 2.0, v() + nalgebra::Vector3::x()]) else {
         return;
     };
     let prior = match Prior::from_attitude(&black_box(Matrix3::identity()), &black_box(Matrix3::identity()), black_box(0.01)) {

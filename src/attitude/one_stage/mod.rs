@@ -64,7 +64,6 @@
 //! information is independent of the biases), which the filter recovers over time because the
 //! biases are constant while the attitude moves.
 
-mod array;
 pub mod bessel;
 mod config;
 pub mod discriminator;
@@ -74,6 +73,7 @@ mod input;
 mod layout;
 mod linalg;
 pub mod lock;
+mod phase;
 mod prior;
 mod trig;
 mod update;
@@ -81,7 +81,7 @@ mod update;
 #[cfg(test)]
 mod tests;
 
-pub use array::{paper003_partials, Antenna, AntennaArray, PhaseModel};
+pub use crate::attitude::array::{Antenna, AntennaArray};
 pub use bessel::BesselRatio;
 pub use config::{EstimatedAngles, FilterMode, OneStageConfig, ProcessNoise, GPS_L1_WAVELENGTH_M};
 pub use discriminator::{
@@ -93,4 +93,5 @@ pub use information::{EpochInformation, PARAMETERS};
 pub use input::{SatelliteObservation, MAX_SATELLITES};
 pub use layout::StateLayout;
 pub use lock::{LockConfig, LockDetector, LockStatus};
+pub use phase::{paper003_partials, PhaseModel};
 pub use prior::Prior;

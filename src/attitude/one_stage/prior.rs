@@ -6,7 +6,7 @@ use nalgebra::{Cholesky, Matrix3, Vector3};
 use crate::geometry::{vee, Paper003Angles};
 use crate::{real, OneStageError, Real};
 
-use super::array::paper003_partials;
+use super::phase::paper003_partials;
 
 /// Mean and covariance the filter starts from.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -127,6 +127,16 @@ fn invalid_configuration_and_prior_are_rejected() {
         OneStageFilter::<f32, 8>::new(good, array, &prior).err(),
         Some(OneStageError::InvalidConfig)
     );
+    // three collinear antennas are an array (paper 000 takes them) but not a one-stage array
+    let line = AntennaArray::new([Vector3::zeros(), Vector3::x(), Vector3::x() * 2.0]).unwrap();
+    assert_eq!(
+        OneStageFilter::<f32, 6>::new(good, line, &prior).err(),
+        Some(OneStageError::DegenerateArray)
+    );
+    assert_eq!(
+        AntennaArray::<f32>::paper_triangle(0.0).map_err(OneStageError::from),
+        Err(OneStageError::DegenerateArray)
+    );
     let mut bad_prior = prior;
     bad_prior.angle_covariance.m22 = -1.0;
     assert_eq!(
