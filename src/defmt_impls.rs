@@ -468,8 +468,19 @@ mod one_stage {
     use defmt::{write, Format, Formatter};
 
     use crate::attitude::one_stage::{
-        EpochInformation, OneStageFilter, PhaseModel, Prior, SatelliteTerms,
+        EpochInformation, OneStageFilter, PhaseDifferences, PhaseModel, Prior, SatelliteTerms,
     };
+
+    impl Format for PhaseDifferences {
+        fn format(&self, f: Formatter<'_>) {
+            write!(
+                f,
+                "PhaseDifferences {{ epochs: {=u32}, cycles: {} }}",
+                self.epochs(),
+                self.phase_cycles()
+            );
+        }
+    }
 
     impl Format for PhaseModel<f32> {
         fn format(&self, f: Formatter<'_>) {

@@ -469,6 +469,10 @@ pub enum OneStageError {
     /// The prior attitude is at the gimbal lock of the paper's angles (`cos β` below 1e-3),
     /// where a rotation-vector covariance cannot be mapped onto α, β, γ.
     GimbalLock,
+    /// A snapshot solution offered as the prior is not of
+    /// [`SnapshotQuality::Good`](crate::attitude::snapshot::SnapshotQuality::Good) (its
+    /// residuals failed the χ² test or its iteration did not converge).
+    UnusableSnapshot,
     /// The filter step produced non-finite numbers or lost definiteness from finite input; the
     /// filter is unchanged.
     Numerical,
@@ -484,6 +488,7 @@ impl Error for OneStageError {
             | Self::TooManySatellites => ErrorKind::InvalidInput,
             Self::InvalidCovariance => ErrorKind::NotPositiveDefinite,
             Self::GimbalLock => ErrorKind::Unobservable,
+            Self::UnusableSnapshot => ErrorKind::InvalidInput,
             Self::Numerical => ErrorKind::Numerical,
         }
     }
@@ -499,6 +504,7 @@ impl fmt::Display for OneStageError {
             Self::TooManySatellites => "too many satellites in one epoch",
             Self::InvalidCovariance => "prior covariance is not positive definite",
             Self::GimbalLock => "prior attitude at the gimbal lock of the paper's angles",
+            Self::UnusableSnapshot => "snapshot solution not good enough for a prior",
             Self::Numerical => "one-stage filter step failed numerically",
         })
     }

@@ -108,6 +108,35 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         Ok(())
     }
 
+    /// Forgets what the filter knows about the line biases (after the front end re-locked and
+    /// the inter-channel phases jumped), keeping the attitude and its rates: the bias states'
+    /// covariance rows and columns are cleared and their variances set to `variance` (rad²).
+    /// The constant-gain loop has no covariance; its bias loop re-converges by itself. A
+    /// filter without bias states is left as it is.
+    ///
+    /// # Errors
+    /// [`OneStageError::NonFiniteInput`], [`OneStageError::InvalidCovariance`] for a variance
+    /// that is not positive; the filter is then unchanged.
+    pub fn reopen_line_biases(&mut self, variance: T) -> Result<(), OneStageError> {
+        if !variance.is_finite() {
+            return Err(OneStageError::NonFiniteInput);
+        }
+        if !(variance > T::zero()) {
+            return Err(OneStageError::InvalidCovariance);
+        }
+        let mut p = *self.ekf.covariance();
+        for idx in self.layout.parameter.iter().skip(3).flatten() {
+            for k in 0..N {
+                set(&mut p, *idx, k, T::zero());
+                set(&mut p, k, *idx, T::zero());
+            }
+            set(&mut p, *idx, *idx, variance);
+        }
+        self.ekf
+            .set_covariance(p)
+            .map_err(|_| OneStageError::InvalidCovariance)
+    }
+
     fn initial_state(
         layout: &StateLayout,
         prior: &Prior<T>,
