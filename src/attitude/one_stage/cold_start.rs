@@ -19,6 +19,9 @@
 //! measurement: [`PhaseDifferences::phase_satellite`] sets the code single differences to zero,
 //! and the resolver's `code_sigma_m` must then be at least the longest baseline, so that the
 //! array's geometry (baseline lengths and angle, the constrained search) fixes the integers.
+//! The float covariance is then some 10⁷ times wider along the code directions than along the
+//! phases: run the resolver in `f64` (a one-off at a cold start; `tests/one_stage_samples.rs`
+//! does so on synthesized samples), where `f32` reports it as not positive definite.
 
 use nalgebra::{Complex, Vector3};
 
