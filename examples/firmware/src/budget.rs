@@ -21,15 +21,17 @@ use gnss_attitude::gyro::{
     NormalEquations, PaperCalibrator, SqrtInformation,
 };
 use gnss_attitude::attitude::one_stage::{
-    EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
+    AdapterConfig, EpochClock, ObservationAdapter, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
     PromptIq, SatelliteObservation, MAX_SATELLITES,
 };
 use gnss_attitude::geometry::Paper003Angles;
 use gnss_attitude::signal::selftest::{
     run_correlator_self_test, signal_self_test_samples, SIGNAL_SELF_TEST_LEN, SIGNAL_SELF_TEST_RATE_HZ,
 };
-use gnss_attitude::signal::{Correlator, CorrelatorConfig, Prn, SampleBlock};
-use gnss_attitude::tracking::{Acquisition, AcquisitionConfig, Channel, ChannelConfig, SearchResult};
+use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, Taps};
+use gnss_attitude::tracking::{
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, LockFlags, SearchResult, TrackingEpoch,
+};
 use nalgebra::{ComplexField, Matrix3, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
 /// Six sample streams (I and Q of three antennas), one code period at 2.6 Msps, built at
@@ -378,6 +380,49 @@ fn one_stage_budgets() {
     one_stage_budget::<8>(&array, &obs, "one-stage step, 12 sats, constant gain, 3 angles + 2 biases (N = 8)", FilterMode::ConstantGain, EstimatedAngles::ALL, true, MAX_SATELLITES);
     one_stage_budget::<2>(&array, &obs, "one-stage step, 12 sats, Gaussian approx., beta only (N = 2)", FilterMode::GaussianApproximation, EstimatedAngles::BETA_ONLY, false, MAX_SATELLITES);
     one_stage_budget::<2>(&array, &obs, "one-stage step, 8 sats, Gaussian approx., beta only (paper, N = 2)", FilterMode::GaussianApproximation, EstimatedAngles::BETA_ONLY, false, 8);
+    one_stage_adapter_budget();
+}
+
+/// The adapter from the tracking channels: one `TrackingEpoch<3>` → observation and its
+/// filter epoch (per channel and code period).
+fn one_stage_adapter_budget() {
+    let taps = |p: i32, n: i32| Taps {
+        prompt: Iq { i: 40_000 + p, q: -25_000 + 3 * p },
+        noise: Iq { i: 9_000 - n, q: 7_000 + n },
+        ..Taps::default()
+    };
+    let Some(prn) = Prn::new(5) else { return };
+    let mut epoch = TrackingEpoch {
+        prn,
+        index: 1000,
+        correlations: EpochCorrelations {
+            taps: [taps(0, 0), taps(100, 50), taps(-80, -20)],
+            samples: 2600,
+            first_sample: 2_600_000,
+            code_phase_at_first: 0,
+            carrier_phase_at_first: 0,
+            complete: true,
+        },
+        doppler_hz: 1200.0,
+        cn0_dbhz: 40.0,
+        lock: LockFlags { code: true, phase: true, bit_sync: true },
+        state: ChannelState::Tracking,
+        phase_error_cycles: 0.0,
+        code_error_chips: 0.0,
+        data_bit: None,
+    };
+    let (Ok(mut adapter), Ok(clock)) = (ObservationAdapter::new(AdapterConfig::default()), EpochClock::new(2_600_000, 2600)) else {
+        return;
+    };
+    for k in 0..300 {
+        epoch.correlations.taps[1].noise.i = 8_000 + 7 * k;
+        let _ = adapter.observe(&epoch, [0.0, 0.6, 0.8]);
+    }
+    let _ = measure("one-stage adapter: TrackingEpoch<3> -> observation + filter epoch", || {
+        let o = black_box(&mut adapter).observe(black_box(&epoch), black_box([0.0, 0.6, 0.8]));
+        let k = clock.epoch_of(&black_box(epoch).correlations);
+        matches!(o, Ok(Some(_))) && k.is_some()
+    });
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -296,7 +296,13 @@ fn compare_paths(
         .metric("information_loss_db_samples", loss_s.loss_db)
         .metric("information_loss_db_iq", loss_iq.loss_db)
         .metric("chain_loss_db", loss_s.loss_db - loss_iq.loss_db)
+        .metric(
+            "chain_loss_db_low_frequency",
+            10.0 * (loss_iq.ratio_low_frequency / loss_s.ratio_low_frequency).log10(),
+        )
         .metric("cross_correlation_loss_db_predicted", mai_db)
+        .metric("loop_gain_factor_samples", loss_s.slope_over_expected)
+        .metric("loop_gain_factor_iq", loss_iq.slope_over_expected)
         .metric(
             "bound_arcmin_measured_information",
             loss_s.bound_arcmin(bound),
@@ -310,13 +316,16 @@ fn compare_paths(
         .metric("sample_tracking_s", st.tracking_s)
         .metric("sample_acquisition_s", st.acquisition_s);
     summary.push(format!(
-        "samples vs I/Q fast path: σ ratio {:.3}; information per epoch vs ideal (slope²/var of u_β at the truth, {} epochs): samples −{:.2} dB, I/Q −{:.2} dB → chain loss {:.2} dB (cross-correlation of the other satellites: {:.2} dB predicted); C/N0 reported {:.2} dB-Hz; bound at the measured information {:.3}′",
+        "samples vs I/Q fast path: σ ratio {:.3}; information per epoch vs ideal (slope²/var of u_β at the truth, {} epochs): samples −{:.2} dB, I/Q −{:.2} dB → chain loss {:.2} dB (cross-correlation of the other satellites: {:.2} dB predicted), below 10 Hz {:.2} ± 0.2 dB; loop gain factor {:.3} / {:.3}; C/N0 reported {:.2} dB-Hz; bound at the measured information {:.3}′",
         g.sigma_arcmin / iq.sigma_arcmin,
         loss_s.epochs,
         loss_s.loss_db,
         loss_iq.loss_db,
         loss_s.loss_db - loss_iq.loss_db,
         mai_db,
+        10.0 * (loss_iq.ratio_low_frequency / loss_s.ratio_low_frequency).log10(),
+        loss_s.slope_over_expected,
+        loss_iq.slope_over_expected,
         st.mean_cn0_dbhz,
         loss_s.bound_arcmin(bound)
     ));
