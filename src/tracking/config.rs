@@ -99,12 +99,14 @@ impl ChannelConfig {
             return Err(TrackingError::NonFinite);
         }
         let bw_ok = |b: f32| (0.0..=100.0).contains(&b);
-        if !(bw_ok(self.pll_bandwidth_hz)
+        let bandwidths_ok = bw_ok(self.pll_bandwidth_hz)
             && bw_ok(self.fll_pull_in_bandwidth_hz)
             && bw_ok(self.fll_bandwidth_hz)
             && bw_ok(self.dll_pull_in_bandwidth_hz)
-            && bw_ok(self.dll_bandwidth_hz))
-            || !(0.0..=1000.0).contains(&self.max_doppler_rate_hz_s)
+            && bw_ok(self.dll_bandwidth_hz);
+        let rate_ok = (0.0..=1000.0).contains(&self.max_doppler_rate_hz_s);
+        if !bandwidths_ok
+            || !rate_ok
             || self.lock_window == 0
             || self.cn0_window == 0
         {

@@ -8,10 +8,11 @@
 //! The channels use [`ChannelConfig::leo`]: the refinement stage also estimates the Doppler
 //! rate (harmless for a ground receiver, needed for LEO dynamics; see the README).
 //!
-//! Re-acquisition: a satellite without code lock for [`REACQUIRE_AFTER_S`] (after its pull-in
-//! allowance) is searched again on the next milliseconds of the stream (same settings as the
-//! first acquisition) and, when found, handed over again; otherwise searched again a second
-//! later.
+//! Re-acquisition: a satellite without code and phase lock for [`REACQUIRE_AFTER_S`] (after its
+//! pull-in allowance; phase lock too, because a 100 ms code-lock window passes the C/N0
+//! threshold on noise alone a few times in a thousand) is searched again on the next milliseconds of the stream (same settings as the
+//! first acquisition) and, when found, handed over again; otherwise searched again
+//! [`RETRY_EVERY_S`] later.
 
 use std::time::Instant;
 
@@ -27,8 +28,11 @@ use super::attitude::{AttitudeReport, AttitudeSetup, AttitudeSolver, PhaseAccumu
 use super::reader::{Block, Recording};
 use crate::chain::{search_prns, track_block};
 
-/// Seconds without code lock after which a satellite is re-acquired.
+/// Seconds without code and phase lock after which a satellite is re-acquired.
 pub const REACQUIRE_AFTER_S: f64 = 1.0;
+
+/// Interval of the re-acquisition attempts of a satellite not found, s.
+pub const RETRY_EVERY_S: f64 = 0.5;
 
 /// Pull-in allowance after a hand-over before the re-acquisition clock runs, s (refinement
 /// 0.256 s, pull-in 0.3 s, a lock window 0.1 s, margin).
@@ -148,7 +152,7 @@ pub struct SatTrack {
     fs: f64,
     active: bool,
     started_t: f64,
-    last_code_lock_t: f64,
+    last_lock_t: f64,
     last_t: f64,
     reacquisitions: u32,
     retry_at: f64,
@@ -178,7 +182,7 @@ impl SatTrack {
             fs,
             active: true,
             started_t: 0.0,
-            last_code_lock_t: 0.0,
+            last_lock_t: 0.0,
             last_t: 0.0,
             reacquisitions: 0,
             retry_at: 0.0,
@@ -210,8 +214,8 @@ impl SatTrack {
             self.close_row();
         }
         let locked = e.lock.code && e.lock.phase;
-        if e.lock.code {
-            self.last_code_lock_t = t;
+        if locked {
+            self.last_lock_t = t;
         }
         let doppler = f64::from(e.doppler_hz);
         self.row_sum.2 += 1;
@@ -273,9 +277,7 @@ impl SatTrack {
     }
 
     fn needs_reacquisition(&self, now: f64) -> bool {
-        let since = self
-            .last_code_lock_t
-            .max(self.started_t + PULL_IN_ALLOWANCE_S);
+        let since = self.last_lock_t.max(self.started_t + PULL_IN_ALLOWANCE_S);
         self.active && now - since > REACQUIRE_AFTER_S
     }
 
@@ -429,6 +431,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
     let acq_config = opts.acquire.config(rec, acq_report.noncoherent_ms)?;
     let mut attitude = solver.map(|s| (s, Vec::new()));
     let mut next_window = 0usize;
+    let bar = crate::report::progress(total.div_ceil(opts.block as u64), "tracking");
     loop {
         let left = total.saturating_sub(reader.position());
         if left == 0 {
@@ -444,6 +447,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         track_block(&mut channels, &sb, |s| s.active, |s, e| s.epoch(e))?;
         wall.tracking_s += t0.elapsed().as_secs_f64();
         let now = (block.first + block.len() as u64) as f64 / fs;
+        bar.inc(1);
         if opts.reacquire {
             let t0 = Instant::now();
             reacquire(
@@ -471,6 +475,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
             wall.attitude_s += t0.elapsed().as_secs_f64();
         }
     }
+    bar.finish_and_clear();
     let end_t = total as f64 / fs;
     let attitude = match attitude {
         Some((solver, mut out)) => {
@@ -547,6 +552,7 @@ fn reacquire<const A: usize>(
         .collect();
     let q = block.complex.then_some(&c.q[..]);
     let results = search_prns(&c.i, q, c.first, &prns, config)?;
+
     let (found, _) = split_cross_correlations(&results, opts);
     for r in results {
         let Some((ch, s)) = channels.iter_mut().find(|(_, s)| s.prn == r.prn.number()) else {
@@ -558,7 +564,7 @@ fn reacquire<const A: usize>(
             s.started_t = now;
             s.reacquisitions += 1;
         } else {
-            s.retry_at = now + 1.0;
+            s.retry_at = now + RETRY_EVERY_S;
         }
     }
     *collection = None;
