@@ -105,11 +105,7 @@ impl ChannelConfig {
             && bw_ok(self.dll_pull_in_bandwidth_hz)
             && bw_ok(self.dll_bandwidth_hz);
         let rate_ok = (0.0..=1000.0).contains(&self.max_doppler_rate_hz_s);
-        if !bandwidths_ok
-            || !rate_ok
-            || self.lock_window == 0
-            || self.cn0_window == 0
-        {
+        if !bandwidths_ok || !rate_ok || self.lock_window == 0 || self.cn0_window == 0 {
             return Err(TrackingError::InvalidConfig);
         }
         Ok(())

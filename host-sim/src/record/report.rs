@@ -23,10 +23,10 @@ pub fn print_track(run: &TrackRun) {
         r.wall.tracking_s,
         r.wall.reacquisition_s
     );
-    println!("  PRN  acq Doppler (Hz)  first lock (s)  locked (s)  held to end  losses  reacq  C/N0 mean (dB-Hz)  Doppler rate (Hz/s)");
+    println!("  PRN  acq Doppler (Hz)  first lock (s)  locked (s)  held to end  losses  reacq  C/N0 measured / thermal (dB-Hz)  Doppler rate (Hz/s)");
     for s in &r.satellites {
         println!(
-            "  {:3}  {:16.1}  {:>14}  {:10.2}  {:>11}  {:6}  {:5}  {:17.2}  {:19.2}",
+            "  {:3}  {:16.1}  {:>14}  {:10.2}  {:>11}  {:6}  {:5}  {:>31}  {:19.2}",
             s.prn,
             s.acquired_doppler_hz,
             s.first_lock_s
@@ -35,7 +35,7 @@ pub fn print_track(run: &TrackRun) {
             if s.held_to_end { "yes" } else { "no" },
             s.losses,
             s.reacquisitions,
-            s.cn0_dbhz_mean,
+            format!("{:.2} / {:.2}", s.cn0_dbhz_mean, s.cn0_dbhz_thermal),
             s.doppler_rate_hz_s
         );
     }
@@ -102,6 +102,7 @@ pub fn write_track_files(dir: &Path, run: &TrackRun) -> Result<Vec<String>> {
             "losses",
             "reacquisitions",
             "cn0_dbhz_mean",
+            "cn0_dbhz_thermal",
             "doppler_rate_hz_s",
         ],
         run.report.satellites.iter().map(|s| {
@@ -116,6 +117,7 @@ pub fn write_track_files(dir: &Path, run: &TrackRun) -> Result<Vec<String>> {
                 f64::from(s.losses),
                 f64::from(s.reacquisitions),
                 s.cn0_dbhz_mean,
+                s.cn0_dbhz_thermal,
                 s.doppler_rate_hz_s,
             ]
         }),

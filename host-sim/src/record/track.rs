@@ -19,7 +19,7 @@ use std::time::Instant;
 use anyhow::{ensure, Result};
 use gnss_attitude::signal::SampleBlock;
 use gnss_attitude::tracking::{
-    AcquisitionConfig, Channel, ChannelConfig, SearchResult, TrackingEpoch,
+    AcquisitionConfig, Channel, ChannelConfig, ChannelState, SearchResult, TrackingEpoch,
 };
 use serde::Serialize;
 
@@ -106,6 +106,9 @@ pub struct SatelliteReport {
     pub cn0_dbhz_mean: f64,
     /// Smallest and largest of those reports, dB-Hz.
     pub cn0_dbhz_range: [f64; 2],
+    /// `cn0_dbhz_mean` with the modelled cross-correlation of the other tracked satellites
+    /// removed (see [`mai_corrected_cn0`]): the thermal C/N0, dB-Hz.
+    pub cn0_dbhz_thermal: f64,
     /// Doppler rate by least squares over the locked epochs, Hz/s.
     pub doppler_rate_hz_s: f64,
     /// Doppler over time: one value per second (mean of the locked epochs), Hz; `null` for
@@ -213,7 +216,9 @@ impl SatTrack {
         while t > self.row_end {
             self.close_row();
         }
-        let locked = e.lock.code && e.lock.phase;
+        // The lock detector also runs during the refinement stage, whose carrier loop is open:
+        // lock counts from the pull-in on.
+        let locked = e.lock.code && e.lock.phase && e.state != ChannelState::Refining;
         if locked {
             self.last_lock_t = t;
         }
@@ -344,6 +349,7 @@ impl SatTrack {
             } else {
                 range
             },
+            cn0_dbhz_thermal: f64::NAN,
             doppler_rate_hz_s: rate,
             doppler_hz_per_s: per_s(&self.rows),
             cn0_dbhz_per_s: self.cn0_reports.iter().map(|r| r.1).collect(),
@@ -354,6 +360,45 @@ impl SatTrack {
     pub fn rows(&self) -> &[Row] {
         &self.rows
     }
+}
+
+/// Thermal C/N0 from the measured ones (dB-Hz; NaN entries are skipped): the noise tap and the
+/// prompt both see the other satellites' Gold-code cross-correlation, whose mean power is
+/// `E|ρ|² ≈ 1/1023` of each one's 1 ms prompt power, so the core's estimator measures
+/// `C_i/(N0 + I0_i)` with `I0_i/N0 = Σ_{j≠i} (C/N0)_j T/1023`. Solved for the thermal values
+/// by a fixed-point iteration (10 steps; it contracts by `Σ SNR/1023 ≪ 1`). Satellites that
+/// are not tracked are not in the sum.
+pub fn mai_corrected_cn0(measured_dbhz: &[f64]) -> Vec<f64> {
+    let x: Vec<f64> = measured_dbhz
+        .iter()
+        .map(|c| {
+            if c.is_finite() {
+                10f64.powf(c / 10.0)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut thermal = x.clone();
+    for _ in 0..10 {
+        let snr_sum: f64 = thermal.iter().map(|c| c * 1e-3 / 1023.0).sum();
+        thermal = x
+            .iter()
+            .zip(&thermal)
+            .map(|(&xi, &ti)| xi * (1.0 + snr_sum - ti * 1e-3 / 1023.0))
+            .collect();
+    }
+    measured_dbhz
+        .iter()
+        .zip(thermal)
+        .map(|(m, t)| {
+            if m.is_finite() {
+                10.0 * t.log10()
+            } else {
+                f64::NAN
+            }
+        })
+        .collect()
 }
 
 /// Samples of the reference antenna collected for a re-acquisition.
@@ -490,7 +535,11 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         None => None,
     };
     let mut tracks: Vec<SatTrack> = channels.into_iter().map(|(_, s)| s).collect();
-    let satellites = tracks.iter_mut().map(|s| s.report(end_t)).collect();
+    let mut satellites: Vec<SatelliteReport> = tracks.iter_mut().map(|s| s.report(end_t)).collect();
+    let measured: Vec<f64> = satellites.iter().map(|s| s.cn0_dbhz_mean).collect();
+    for (s, c) in satellites.iter_mut().zip(mai_corrected_cn0(&measured)) {
+        s.cn0_dbhz_thermal = c;
+    }
     Ok(TrackRun {
         report: TrackReport {
             acquisition: acq_report,
@@ -569,4 +618,24 @@ fn reacquire<const A: usize>(
     }
     *collection = None;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mai_corrected_cn0;
+
+    /// Two satellites at 50 dB-Hz (SNR 100 per 1 ms): each sees I0/N0 = 100/1023, so the
+    /// measured value is 50 − 10 log10(1.0978) = 49.595 dB-Hz; the correction returns 50.
+    /// A lone satellite is unchanged; NaN stays NaN and is not counted.
+    #[test]
+    fn mai_correction_inverts_the_model() {
+        let measured = 50.0 - 10.0 * (1.0 + 100.0 / 1023.0f64).log10();
+        let c = mai_corrected_cn0(&[measured, measured, f64::NAN]);
+        assert!(
+            (c[0] - 50.0).abs() < 1e-3 && (c[1] - 50.0).abs() < 1e-3,
+            "{c:?}"
+        );
+        assert!(c[2].is_nan());
+        assert_eq!(mai_corrected_cn0(&[43.0]), vec![43.0]);
+    }
 }
