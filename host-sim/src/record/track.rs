@@ -362,13 +362,21 @@ impl SatTrack {
     }
 }
 
+/// Spectral separation coefficient of two GPS C/A (BPSK-R(1)) signals with rectangular chips
+/// and no band limit, 1/Hz: `κ = ∫ G(f)² df = 2/(3 f_c)` (−61.9 dB/Hz). A 1 ms prompt sees
+/// another satellite's code at a random fractional chip offset `u`; its cross-correlation power
+/// is `((1 − u)² + u²)/1023` on average over the code, i.e. `(2/3)/1023` over `u`.
+pub const CA_SPECTRAL_SEPARATION_PER_HZ: f64 = 2.0 / (3.0 * gnss_attitude::signal::CA_CHIP_RATE_HZ);
+
 /// Thermal C/N0 from the measured ones (dB-Hz; NaN entries are skipped): the noise tap and the
-/// prompt both see the other satellites' Gold-code cross-correlation, whose mean power is
-/// `E|ρ|² ≈ 1/1023` of each one's 1 ms prompt power, so the core's estimator measures
-/// `C_i/(N0 + I0_i)` with `I0_i/N0 = Σ_{j≠i} (C/N0)_j T/1023`. Solved for the thermal values
-/// by a fixed-point iteration (10 steps; it contracts by `Σ SNR/1023 ≪ 1`). Satellites that
-/// are not tracked are not in the sum.
+/// prompt both see the other satellites' cross-correlation, so the core's estimator measures
+/// `C_i/(N0 + I0_i)` with `I0_i = κ Σ_{j≠i} C_j` (the effective C/N0 of Betz's spectral
+/// separation coefficient, `κ` = [`CA_SPECTRAL_SEPARATION_PER_HZ`]). Solved for the thermal
+/// values by a fixed-point iteration (10 steps; it contracts by `κ Σ C/N0 ≪ 1`). Satellites
+/// that are not tracked are not in the sum; a band-limited front end has a somewhat smaller
+/// `κ`.
 pub fn mai_corrected_cn0(measured_dbhz: &[f64]) -> Vec<f64> {
+    let kappa = CA_SPECTRAL_SEPARATION_PER_HZ;
     let x: Vec<f64> = measured_dbhz
         .iter()
         .map(|c| {
@@ -381,11 +389,11 @@ pub fn mai_corrected_cn0(measured_dbhz: &[f64]) -> Vec<f64> {
         .collect();
     let mut thermal = x.clone();
     for _ in 0..10 {
-        let snr_sum: f64 = thermal.iter().map(|c| c * 1e-3 / 1023.0).sum();
+        let sum: f64 = thermal.iter().map(|c| c * kappa).sum();
         thermal = x
             .iter()
             .zip(&thermal)
-            .map(|(&xi, &ti)| xi * (1.0 + snr_sum - ti * 1e-3 / 1023.0))
+            .map(|(&xi, &ti)| xi * (1.0 + sum - ti * kappa))
             .collect();
     }
     measured_dbhz
@@ -624,12 +632,12 @@ fn reacquire<const A: usize>(
 mod tests {
     use super::mai_corrected_cn0;
 
-    /// Two satellites at 50 dB-Hz (SNR 100 per 1 ms): each sees I0/N0 = 100/1023, so the
-    /// measured value is 50 − 10 log10(1.0978) = 49.595 dB-Hz; the correction returns 50.
+    /// Two satellites at 50 dB-Hz: each sees I0/N0 = 10⁵ · 2/(3 · 1.023·10⁶) = 0.0652, so the
+    /// measured value is 50 − 10 log10(1.0652) = 49.726 dB-Hz; the correction returns 50.
     /// A lone satellite is unchanged; NaN stays NaN and is not counted.
     #[test]
     fn mai_correction_inverts_the_model() {
-        let measured = 50.0 - 10.0 * (1.0 + 100.0 / 1023.0f64).log10();
+        let measured = 50.0 - 10.0 * (1.0 + 1e5 * 2.0 / 3.0 / 1.023e6f64).log10();
         let c = mai_corrected_cn0(&[measured, measured, f64::NAN]);
         assert!(
             (c[0] - 50.0).abs() < 1e-3 && (c[1] - 50.0).abs() < 1e-3,
