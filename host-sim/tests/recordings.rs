@@ -249,6 +249,13 @@ fn three_antenna_recording_gives_the_attitude() {
         // The first window holds the pull-in (lock at 0.4 s): refused, not guessed.
         assert!(att.per_window[0].refused.is_some());
         assert_eq!(att.fixed, 2);
+        let worst = att
+            .per_window
+            .iter()
+            .filter_map(|w| w.ypr_deg)
+            .flat_map(|w| (0..3).map(move |j| (w[j] - truth.attitude_ypr_deg[j]).abs()))
+            .fold(0.0, f64::max);
+        eprintln!("{layout}: largest per-window angle error {worst:.4} deg");
         for w in att.per_window.iter().filter_map(|w| w.ypr_deg) {
             for j in 0..3 {
                 assert!(
@@ -308,9 +315,14 @@ fn satellites_are_reacquired_after_a_blackout() {
     let run = record::track(&rec, &opts).unwrap();
     for (s, t) in run.report.satellites.iter().zip(&run.tracks) {
         let last: Vec<f64> = t.rows().iter().rev().take(10).map(|r| r.locked).collect();
+        let relocked = t
+            .rows()
+            .iter()
+            .find(|r| r.t_s > 3.5 && r.locked > 0.0)
+            .map(|r| r.t_s);
         eprintln!(
-            "PRN {}: losses {}, re-acquisitions {}, lock time {:.2} s, last second locked {:?}",
-            s.prn, s.losses, s.reacquisitions, s.lock_time_s, last
+            "PRN {}: losses {}, re-acquisitions {}, lock time {:.2} s, locked again at {relocked:?} s, last second locked {last:?}",
+            s.prn, s.losses, s.reacquisitions, s.lock_time_s
         );
         assert!(s.losses >= 1 && s.reacquisitions >= 1, "PRN {}", s.prn);
         assert!(last.iter().all(|&l| l == 1.0), "PRN {}", s.prn);
