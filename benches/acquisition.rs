@@ -4,6 +4,7 @@
 //! * one engine, the 12 PRNs one after the other (one core);
 //! * `host_sim::chain::search_prns`, what `host-sim acquire` runs (rayon over PRNs, one
 //!   engine per worker);
+//!
 //! and one PRN over ±50 kHz (201 bins, the LEO search) from the same 10 ms.
 
 use std::hint::black_box;

@@ -123,7 +123,7 @@ pub fn write_track_files(dir: &Path, run: &TrackRun) -> Result<Vec<String>> {
         }),
     )?;
     files.push(sats);
-    let series = |f: &dyn Fn(&super::track::Row) -> f64| -> Vec<Series> {
+    let series = |f: &dyn Fn(&super::satellite::Row) -> f64| -> Vec<Series> {
         run.tracks
             .iter()
             .enumerate()
