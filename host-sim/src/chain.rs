@@ -134,19 +134,14 @@ impl Tracker {
         let n_acq = params.acquisition.samples_needed();
         let acq_samples = samples(params, 0, n_acq)?;
         let complex = params.format.is_complex();
-        let searches: Vec<SearchResult> = params
-            .search_prns
-            .par_iter()
-            .map_init(
-                || Acquisition::<2048>::new().map(Box::new),
-                |engine, &p| -> Result<SearchResult> {
-                    let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
-                    let prn = Prn::new(p).context("PRN out of range")?;
-                    let q = complex.then_some(&acq_samples.q[0][..]);
-                    Ok(engine.search(prn, &acq_samples.i[0], q, 0, &params.acquisition)?)
-                },
-            )
-            .collect::<Result<_>>()?;
+        let q = complex.then_some(&acq_samples.q[0][..]);
+        let searches = search_prns(
+            &acq_samples.i[0],
+            q,
+            0,
+            &params.search_prns,
+            &params.acquisition,
+        )?;
         let acquisition_seconds = started.elapsed().as_secs_f64();
         let mut false_detections = Vec::new();
         let mut channels = Vec::new();
@@ -272,4 +267,54 @@ fn record(e: &TrackingEpoch<ANTENNAS>, fs: f64) -> EpochRecord {
         code_phase_chips: c.code_phase_at_first as f64 / 4_294_967_296.0,
         first_sample: c.first_sample,
     }
+}
+
+/// Searches `prns` in one antenna's samples (`q = None` for real samples; `first_sample` is
+/// the receiver index of `i[0]`), in parallel over PRNs with one `Acquisition<2048>` per
+/// worker. Results in the order of `prns`.
+///
+/// # Errors
+/// A PRN outside 1–32, or the core's refusal of the configuration or the samples.
+pub fn search_prns(
+    i: &[i8],
+    q: Option<&[i8]>,
+    first_sample: u64,
+    prns: &[u8],
+    config: &AcquisitionConfig,
+) -> Result<Vec<SearchResult>> {
+    prns.par_iter()
+        .map_init(
+            || Acquisition::<2048>::new().map(Box::new),
+            |engine, &p| -> Result<SearchResult> {
+                let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
+                let prn = Prn::new(p).with_context(|| format!("PRN {p} out of range 1-32"))?;
+                Ok(engine.search(prn, i, q, first_sample, config)?)
+            },
+        )
+        .collect()
+}
+
+/// Runs every active channel over `block` (in parallel over channels) and hands each complete
+/// epoch to `on_epoch` with the channel's companion state `S`.
+///
+/// # Errors
+/// The first channel error (the block must continue the stream the channels have seen).
+pub fn track_block<const A: usize, S: Send>(
+    channels: &mut [(Channel<A>, S)],
+    block: &SampleBlock<'_, A>,
+    active: impl Fn(&S) -> bool + Sync,
+    on_epoch: impl Fn(&mut S, &TrackingEpoch<A>) + Sync,
+) -> Result<()> {
+    channels
+        .par_iter_mut()
+        .filter(|(_, s)| active(s))
+        .try_for_each(|(ch, s)| -> Result<()> {
+            let mut cursor = 0;
+            while cursor < block.len() {
+                if let Some(e) = ch.process(block, &mut cursor)? {
+                    on_epoch(s, &e);
+                }
+            }
+            Ok(())
+        })
 }

@@ -516,6 +516,24 @@ fn signal_budgets() {
             }
         }
     }
+    // The end of the refinement stage (one epoch per hand-over): the residual Doppler from
+    // 256 squared prompts, and with the LEO Doppler-rate estimate.
+    let mut squares = [[0.0f32; 2]; gnss_attitude::tracking::channel::REFINEMENT_EPOCHS];
+    for (k, z) in squares.iter_mut().enumerate() {
+        let t = k as f32 * 1e-3;
+        let w = core::f32::consts::TAU * (2.0 * 37.0 * t + 60.0 * t * t);
+        *z = [nalgebra::ComplexField::cos(w), nalgebra::ComplexField::sin(w)];
+    }
+    let _ = measure("refinement: residual Doppler from 256 squared prompts", || {
+        gnss_attitude::tracking::channel::refine_frequency(black_box(&squares), black_box(1e-3))
+    });
+    let _ = measure("refinement: residual Doppler + rate (LEO), 256 squared prompts", || {
+        gnss_attitude::tracking::channel::refine_frequency_and_rate(
+            black_box(&squares),
+            black_box(1e-3),
+            black_box(150.0),
+        )
+    });
     // Acquisition: one Doppler bin x one millisecond, N = 1024 (the target's size).
     if let (Ok(mut acq), Some(prn)) = (Acquisition::<1024>::new(), Prn::new(5)) {
         let cfg = AcquisitionConfig {

@@ -32,7 +32,7 @@ use gnss_attitude::attitude::one_stage::{
 use gnss_attitude::frontend::nt1065::{Nt1065, Nt1065Config};
 use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
 use gnss_attitude::tracking::acquisition::detection_threshold;
-use gnss_attitude::tracking::channel::refine_frequency;
+use gnss_attitude::tracking::channel::{refine_frequency, refine_frequency_and_rate};
 use gnss_attitude::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, LockFlags, SearchResult, TrackingEpoch,
 };
@@ -377,7 +377,8 @@ fn signal_chain() {
             let mut cursor = black_box(0);
             let _ = black_box(c.run(&block, &mut cursor));
         }
-        let ch_cfg = ChannelConfig::new(black_box(2.6e6), black_box(0.0));
+        let mut ch_cfg = ChannelConfig::new(black_box(2.6e6), black_box(0.0));
+        ch_cfg.max_doppler_rate_hz_s = black_box(150.0);
         if let Ok(mut ch) = Channel::<3>::new(prn, &ch_cfg) {
             let acq = SearchResult {
                 prn,
@@ -406,6 +407,7 @@ fn signal_chain() {
     }
     let squares: [[f32; 2]; 8] = black_box([[1.0, 0.0]; 8]);
     let _ = black_box(refine_frequency(&squares, black_box(1e-3)));
+    let _ = black_box(refine_frequency_and_rate(&squares, black_box(1e-3), black_box(150.0)));
     let _ = black_box(detection_threshold(black_box(10), black_box(1e5), black_box(1e-3)));
     let mut fe = Nt1065::new(OpaqueSpi);
     let _ = black_box(fe.configure(&black_box(Nt1065Config::three_antenna_l1())));
