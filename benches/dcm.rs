@@ -6,7 +6,8 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::multi_structure::MultiStructureFilter;
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};

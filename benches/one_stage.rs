@@ -2,16 +2,62 @@
 //! receiver's maximum) with every state on (three angles, rates, two line biases), both update
 //! forms, and the paper's configuration (8 satellites, β only). The target's instruction counts
 //! of the same step come from the firmware under `examples/firmware` (printed by `.ci/run`).
+//! Also the adapter from the tracking channels: 12 `TrackingEpoch<3>`s → observations.
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use gnss_attitude::attitude::one_stage::{
-    AntennaArray, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
-    PromptIq, SatelliteObservation, MAX_SATELLITES,
+    AdapterConfig, AntennaArray, EpochClock, EstimatedAngles, FilterMode, ObservationAdapter,
+    OneStageConfig, OneStageFilter, PhaseModel, Prior, PromptIq, SatelliteObservation,
+    MAX_SATELLITES,
 };
 use gnss_attitude::geometry::Paper003Angles;
+use gnss_attitude::signal::{EpochCorrelations, Iq, Prn, Taps};
+use gnss_attitude::tracking::{ChannelState, LockFlags, TrackingEpoch};
 use nalgebra::Vector3;
+
+/// Twelve locked channels' epochs (prompt and noise taps of three antennas).
+fn tracking_epochs() -> Vec<TrackingEpoch<3>> {
+    (0..MAX_SATELLITES as i32)
+        .map(|k| {
+            let tap = |p: i32| Taps {
+                prompt: Iq {
+                    i: 40_000 + 100 * k + p,
+                    q: -25_000 + 3 * p,
+                },
+                noise: Iq {
+                    i: 9_000 - 50 * k + p,
+                    q: 7_000 + p,
+                },
+                ..Taps::default()
+            };
+            TrackingEpoch {
+                prn: Prn::new(k as u8 + 1).unwrap_or_else(|| panic!("PRN")),
+                index: 1000,
+                correlations: EpochCorrelations {
+                    taps: [tap(0), tap(37), tap(-55)],
+                    samples: 2600,
+                    first_sample: 2_600_000 + 97 * k as u64,
+                    code_phase_at_first: 0,
+                    carrier_phase_at_first: 0,
+                    complete: true,
+                },
+                doppler_hz: 1000.0,
+                cn0_dbhz: 40.0,
+                lock: LockFlags {
+                    code: true,
+                    phase: true,
+                    bit_sync: true,
+                },
+                state: ChannelState::Tracking,
+                phase_error_cycles: 0.0,
+                code_error_chips: 0.0,
+                data_bit: None,
+            }
+        })
+        .collect()
+}
 
 /// `n` satellites spread over the sky, prompt outputs at 40 dB-Hz with a little deterministic
 /// "noise" so that the step does real work.
@@ -87,6 +133,29 @@ fn bench(c: &mut Criterion) {
     );
     c.bench_function("one_stage_step_12sat_gaussian_beta_only", |b| {
         b.iter(|| black_box(beta12.step(black_box(&twelve))).ok());
+    });
+    let epochs = tracking_epochs();
+    let mut adapter =
+        ObservationAdapter::new(AdapterConfig::default()).unwrap_or_else(|e| panic!("{e}"));
+    let clock = EpochClock::new(2_600_000, 2600).unwrap_or_else(|e| panic!("{e}"));
+    for _ in 0..50 {
+        for e in &epochs {
+            let _ = adapter.observe(e, [0.0, 0.6, 0.8]);
+        }
+    }
+    c.bench_function("one_stage_adapter_12_channels", |b| {
+        b.iter(|| {
+            let mut n = 0;
+            for e in black_box(&epochs) {
+                if let (Ok(Some(_)), Some(_)) = (
+                    adapter.observe(e, [0.0, 0.6, 0.8]),
+                    clock.epoch_of(&e.correlations),
+                ) {
+                    n += 1;
+                }
+            }
+            black_box(n)
+        });
     });
 }
 

@@ -212,7 +212,8 @@ impl<const M: usize> Format for AmbiguityResolver<M, f32> {
         write!(f, "AmbiguityResolver {{ {} }}", self.config());
     }
 }
-use crate::attitude::baseline_epoch::{AntennaArray, BaselineEpoch};
+use crate::attitude::array::AntennaArray;
+use crate::attitude::baseline_epoch::BaselineEpoch;
 use crate::attitude::dcm_filter::DirectionCosineFilter;
 use crate::attitude::direction_cosine::DirectionCosineModel;
 use crate::attitude::filter_estimate::FilterEstimate;
@@ -224,7 +225,7 @@ impl Format for AntennaArray<f32> {
         let [r1, r2, r3] = self.positions();
         write!(
             f,
-            "AntennaArray {{ r1: {=[?]}, r2: {=[?]}, r3: {=[?]} }}",
+            "AntennaArray {{ A: {=[?]}, B: {=[?]}, C: {=[?]} }}",
             r1.as_slice(),
             r2.as_slice(),
             r3.as_slice()
@@ -467,18 +468,16 @@ mod one_stage {
     use defmt::{write, Format, Formatter};
 
     use crate::attitude::one_stage::{
-        AntennaArray, EpochInformation, OneStageFilter, PhaseModel, Prior, SatelliteTerms,
+        EpochInformation, OneStageFilter, PhaseDifferences, PhaseModel, Prior, SatelliteTerms,
     };
 
-    impl Format for AntennaArray<f32> {
+    impl Format for PhaseDifferences {
         fn format(&self, f: Formatter<'_>) {
-            let [a, b, c] = self.positions();
             write!(
                 f,
-                "AntennaArray {{ A: {=[?]}, B: {=[?]}, C: {=[?]} }}",
-                a.as_slice(),
-                b.as_slice(),
-                c.as_slice()
+                "PhaseDifferences {{ epochs: {=u32}, cycles: {} }}",
+                self.epochs(),
+                self.phase_cycles()
             );
         }
     }

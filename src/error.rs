@@ -469,6 +469,10 @@ pub enum OneStageError {
     /// The prior attitude is at the gimbal lock of the paper's angles (`cos β` below 1e-3),
     /// where a rotation-vector covariance cannot be mapped onto α, β, γ.
     GimbalLock,
+    /// A snapshot solution offered as the prior is not of
+    /// [`SnapshotQuality::Good`](crate::attitude::snapshot::SnapshotQuality::Good) (its
+    /// residuals failed the χ² test or its iteration did not converge).
+    UnusableSnapshot,
     /// The filter step produced non-finite numbers or lost definiteness from finite input; the
     /// filter is unchanged.
     Numerical,
@@ -484,6 +488,7 @@ impl Error for OneStageError {
             | Self::TooManySatellites => ErrorKind::InvalidInput,
             Self::InvalidCovariance => ErrorKind::NotPositiveDefinite,
             Self::GimbalLock => ErrorKind::Unobservable,
+            Self::UnusableSnapshot => ErrorKind::InvalidInput,
             Self::Numerical => ErrorKind::Numerical,
         }
     }
@@ -499,6 +504,7 @@ impl fmt::Display for OneStageError {
             Self::TooManySatellites => "too many satellites in one epoch",
             Self::InvalidCovariance => "prior covariance is not positive definite",
             Self::GimbalLock => "prior attitude at the gimbal lock of the paper's angles",
+            Self::UnusableSnapshot => "snapshot solution not good enough for a prior",
             Self::Numerical => "one-stage filter step failed numerically",
         })
     }
@@ -765,3 +771,59 @@ impl fmt::Display for ReceiverError {
 }
 
 impl core::error::Error for ReceiverError {}
+/// Errors of the antenna array ([`crate::attitude::array::AntennaArray`]), shared by the
+/// paper-000 filters and the one-stage filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ArrayError {
+    /// An antenna coordinate or the side of the triangle was NaN or infinite.
+    NonFinite,
+    /// Two antennas are closer than
+    /// [`MIN_BASELINE_LENGTH`](crate::attitude::array::MIN_BASELINE_LENGTH) (or a triangle
+    /// side is shorter than that, or negative).
+    CoincidentAntennas,
+    /// The three antennas are (nearly) collinear: they span no plane, so the rotation about
+    /// their line is unobservable (checked by the estimators that need a plane).
+    CollinearAntennas,
+}
+
+impl Error for ArrayError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::CoincidentAntennas | Self::CollinearAntennas => ErrorKind::InvalidInput,
+        }
+    }
+}
+
+impl fmt::Display for ArrayError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::NonFinite => "non-finite antenna position",
+            Self::CoincidentAntennas => "two antennas (nearly) coincide",
+            Self::CollinearAntennas => "the three antennas are (nearly) collinear",
+        })
+    }
+}
+
+impl core::error::Error for ArrayError {}
+
+impl From<ArrayError> for DcmError {
+    fn from(e: ArrayError) -> Self {
+        match e {
+            ArrayError::NonFinite => Self::NonFinite,
+            ArrayError::CoincidentAntennas => Self::ZeroLengthBaseline,
+            ArrayError::CollinearAntennas => Self::SingularGeometry,
+        }
+    }
+}
+
+impl From<ArrayError> for OneStageError {
+    fn from(e: ArrayError) -> Self {
+        match e {
+            ArrayError::NonFinite => Self::NonFiniteInput,
+            ArrayError::CoincidentAntennas | ArrayError::CollinearAntennas => Self::DegenerateArray,
+        }
+    }
+}

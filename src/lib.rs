@@ -89,9 +89,9 @@ pub mod tracking;
 mod defmt_impls;
 
 pub use error::{
-    AcquisitionError, AmbiguityError, CalibrationError, DcmError, ErrorKind, FilterError,
-    FrontEndError, GeometryError, OneStageError, ReceiverError, SampleError, SignalError,
-    SnapshotError, TrackingError,
+    AcquisitionError, AmbiguityError, ArrayError, CalibrationError, DcmError, ErrorKind,
+    FilterError, FrontEndError, GeometryError, OneStageError, ReceiverError, SampleError,
+    SignalError, SnapshotError, TrackingError,
 };
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the

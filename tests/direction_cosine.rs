@@ -3,7 +3,8 @@
 //! quoted accuracy is out of reach, f32 runs 100 000 steps with a positive definite covariance
 //! and agrees with f64, singular geometry and bad input are typed errors that change nothing.
 
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::ColumnChoice;
 use gnss_attitude::attitude::direction_cosine::DirectionCosineModel;

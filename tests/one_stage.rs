@@ -216,7 +216,7 @@ fn satellites_come_and_go_without_a_reset_and_f32_follows_f64() {
     let mut n = 0;
     for k in 0..20_000 {
         let t = k as f64 * EPOCH_S;
-        source.epoch(t, &c_rb, &mut obs);
+        source.epoch(t, &c_rb, &mut obs).expect("epoch");
         // every second a different subset: all 8, the 4 odd PRNs, the 5 highest, none for 50 ms
         let keep = |prn: u8| match (k / 1000) % 4 {
             0 => true,
@@ -257,7 +257,9 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
     let (mut sum, mut sum_sq, mut j_core) = (0.0, 0.0, 0.0);
     let n = 4000;
     for k in 0..n {
-        source.epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs);
+        source
+            .epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs)
+            .expect("epoch");
         let obs64: Vec<_> = obs.iter().map(to_f64).collect();
         let info = f.information(&obs64).expect("information");
         j_core = info.expected[(1, 1)];
@@ -287,7 +289,9 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
     let shifted = OneStageFilter::<f64, 2>::new(config, *f.array(), &prior).expect("filter");
     let mut sum = 0.0;
     for k in 0..n {
-        source.epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs);
+        source
+            .epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs)
+            .expect("epoch");
         let obs64: Vec<_> = obs.iter().map(to_f64).collect();
         sum += shifted.information(&obs64).expect("information").gradient[1];
     }
@@ -308,7 +312,9 @@ fn bad_epochs_are_rejected_and_leave_the_filter_unchanged() {
     let mut f = filter::<f32, 6>(DEFAULT, EstimatedAngles::ALL);
     let mut obs = Vec::new();
     for k in 0..300 {
-        source.epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs);
+        source
+            .epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs)
+            .expect("epoch");
         f.step(&obs).expect("step");
     }
     let before = f.clone();

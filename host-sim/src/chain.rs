@@ -97,92 +97,156 @@ pub fn samples(params: &ChainParams, first: u64, n: usize) -> Result<Planar> {
     decode(params.format, &streams, ANTENNAS, n)
 }
 
-/// Runs acquisition on the first samples, then tracks every detected scene satellite.
-pub fn run(params: &ChainParams, progress: Option<&indicatif::ProgressBar>) -> Result<ChainOutput> {
-    let fs = params.scene.front_end.sample_rate_hz;
-    let started = std::time::Instant::now();
-    let n_acq = params.acquisition.samples_needed();
-    let acq_samples = samples(params, 0, n_acq)?;
-    let complex = params.format.is_complex();
-    let searches: Vec<SearchResult> = params
-        .search_prns
-        .par_iter()
-        .map_init(
-            || Acquisition::<2048>::new().map(Box::new),
-            |engine, &p| -> Result<SearchResult> {
-                let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
-                let prn = Prn::new(p).context("PRN out of range")?;
-                let q = complex.then_some(&acq_samples.q[0][..]);
-                Ok(engine.search(prn, &acq_samples.i[0], q, 0, &params.acquisition)?)
-            },
-        )
-        .collect::<Result<_>>()?;
-    let acq_seconds = started.elapsed().as_secs_f64();
-    let mut false_detections = Vec::new();
-    let mut channels = Vec::new();
-    for s in searches.iter().filter(|s| s.detected) {
-        match params
-            .scene
-            .satellites
-            .iter()
-            .position(|sat| sat.prn == s.prn.number())
-        {
-            Some(k) => {
-                let mut ch = Channel::<ANTENNAS>::new(s.prn, &params.channel)?;
-                ch.start(s)?;
-                channels.push((
-                    ch,
-                    TrackedSatellite {
+/// A tracking channel started from an acquisition of a scene satellite.
+#[derive(Clone, Debug)]
+pub struct TrackedChannel {
+    /// The core's channel.
+    pub channel: Channel<ANTENNAS>,
+    /// Index of the satellite in the scene.
+    pub scene_index: usize,
+    /// The acquisition that started it.
+    pub acquisition: SearchResult,
+}
+
+/// Acquisition, then streamed tracking of the detected scene satellites: the chain a receiver
+/// runs, block by block.
+#[derive(Clone, Debug)]
+pub struct Tracker {
+    /// Every PRN's search.
+    pub searches: Vec<SearchResult>,
+    /// Detected PRNs that are not in the scene.
+    pub false_detections: Vec<u8>,
+    /// The channels, in the order of the searches.
+    pub channels: Vec<TrackedChannel>,
+    /// Wall time of acquisition (with its synthesis), s.
+    pub acquisition_seconds: f64,
+    /// Wall time of the tracking run's sample synthesis so far, s.
+    pub synthesis_seconds: f64,
+    /// Wall time of the tracking channels so far, s.
+    pub tracking_seconds: f64,
+}
+
+impl Tracker {
+    /// Runs acquisition on the first samples and starts a channel for every detected scene
+    /// satellite; tracking starts at sample 0 (the acquisition's first sample).
+    pub fn acquire(params: &ChainParams) -> Result<Self> {
+        let started = std::time::Instant::now();
+        let n_acq = params.acquisition.samples_needed();
+        let acq_samples = samples(params, 0, n_acq)?;
+        let complex = params.format.is_complex();
+        let q = complex.then_some(&acq_samples.q[0][..]);
+        let searches = search_prns(
+            &acq_samples.i[0],
+            q,
+            0,
+            &params.search_prns,
+            &params.acquisition,
+        )?;
+        let acquisition_seconds = started.elapsed().as_secs_f64();
+        let mut false_detections = Vec::new();
+        let mut channels = Vec::new();
+        for s in searches.iter().filter(|s| s.detected) {
+            match params
+                .scene
+                .satellites
+                .iter()
+                .position(|sat| sat.prn == s.prn.number())
+            {
+                Some(k) => {
+                    let mut channel = Channel::<ANTENNAS>::new(s.prn, &params.channel)?;
+                    channel.start(s)?;
+                    channels.push(TrackedChannel {
+                        channel,
                         scene_index: k,
                         acquisition: *s,
-                        epochs: Vec::new(),
-                    },
-                ));
+                    });
+                }
+                None => false_detections.push(s.prn.number()),
             }
-            None => false_detections.push(s.prn.number()),
         }
+        Ok(Self {
+            searches,
+            false_detections,
+            channels,
+            acquisition_seconds,
+            synthesis_seconds: 0.0,
+            tracking_seconds: 0.0,
+        })
     }
-    // Stream the run in blocks; the tracking starts at sample 0 (the acquisition's first sample).
-    let total = (params.duration_s * fs).round() as u64;
-    let block = params.block.max(1);
-    let mut first = 0u64;
-    let (mut synthesis_seconds, mut tracking_seconds) = (0.0, 0.0);
-    while first < total {
-        let n = block.min((total - first) as usize);
+
+    /// Synthesizes samples `[first, first + n)` and runs every channel over them (in parallel
+    /// over channels); returns each channel's complete epochs, in channel order. Blocks must
+    /// follow each other without gaps.
+    pub fn track(
+        &mut self,
+        params: &ChainParams,
+        first: u64,
+        n: usize,
+    ) -> Result<Vec<Vec<TrackingEpoch<ANTENNAS>>>> {
         let t0 = std::time::Instant::now();
         let planar = samples(params, first, n)?;
-        synthesis_seconds += t0.elapsed().as_secs_f64();
+        self.synthesis_seconds += t0.elapsed().as_secs_f64();
         let t0 = std::time::Instant::now();
         let iv: [&[i8]; ANTENNAS] = [&planar.i[0], &planar.i[1], &planar.i[2]];
-        let sb = if complex {
+        let sb = if params.format.is_complex() {
             SampleBlock::complex(first, iv, [&planar.q[0], &planar.q[1], &planar.q[2]])?
         } else {
             SampleBlock::real(first, iv)?
         };
-        channels
+        let out = self
+            .channels
             .par_iter_mut()
-            .try_for_each(|(ch, rec)| -> Result<()> {
+            .map(|ch| -> Result<Vec<TrackingEpoch<ANTENNAS>>> {
+                let mut epochs = Vec::new();
                 let mut cursor = 0;
                 while cursor < sb.len() {
-                    if let Some(e) = ch.process(&sb, &mut cursor)? {
-                        rec.epochs.push(record(&e, fs));
+                    if let Some(e) = ch.channel.process(&sb, &mut cursor)? {
+                        epochs.push(e);
                     }
                 }
-                Ok(())
-            })?;
-        tracking_seconds += t0.elapsed().as_secs_f64();
+                Ok(epochs)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        self.tracking_seconds += t0.elapsed().as_secs_f64();
+        Ok(out)
+    }
+}
+
+/// Runs acquisition on the first samples, then tracks every detected scene satellite.
+pub fn run(params: &ChainParams, progress: Option<&indicatif::ProgressBar>) -> Result<ChainOutput> {
+    let fs = params.scene.front_end.sample_rate_hz;
+    let mut tracker = Tracker::acquire(params)?;
+    let mut tracked: Vec<TrackedSatellite> = tracker
+        .channels
+        .iter()
+        .map(|c| TrackedSatellite {
+            scene_index: c.scene_index,
+            acquisition: c.acquisition,
+            epochs: Vec::new(),
+        })
+        .collect();
+    // Stream the run in blocks; the tracking starts at sample 0 (the acquisition's first sample).
+    let total = (params.duration_s * fs).round() as u64;
+    let block = params.block.max(1);
+    let mut first = 0u64;
+    while first < total {
+        let n = block.min((total - first) as usize);
+        let epochs = tracker.track(params, first, n)?;
+        for (rec, es) in tracked.iter_mut().zip(epochs) {
+            rec.epochs.extend(es.iter().map(|e| record(e, fs)));
+        }
         first += n as u64;
         if let Some(p) = progress {
             p.set_position((first as f64 / total as f64 * 1000.0) as u64);
         }
     }
     Ok(ChainOutput {
-        searches,
-        tracked: channels.into_iter().map(|(_, r)| r).collect(),
-        false_detections,
-        acquisition_seconds: acq_seconds,
-        synthesis_seconds,
-        tracking_seconds,
+        searches: tracker.searches,
+        tracked,
+        false_detections: tracker.false_detections,
+        acquisition_seconds: tracker.acquisition_seconds,
+        synthesis_seconds: tracker.synthesis_seconds,
+        tracking_seconds: tracker.tracking_seconds,
     })
 }
 
@@ -203,4 +267,54 @@ fn record(e: &TrackingEpoch<ANTENNAS>, fs: f64) -> EpochRecord {
         code_phase_chips: c.code_phase_at_first as f64 / 4_294_967_296.0,
         first_sample: c.first_sample,
     }
+}
+
+/// Searches `prns` in one antenna's samples (`q = None` for real samples; `first_sample` is
+/// the receiver index of `i[0]`), in parallel over PRNs with one `Acquisition<2048>` per
+/// worker. Results in the order of `prns`.
+///
+/// # Errors
+/// A PRN outside 1–32, or the core's refusal of the configuration or the samples.
+pub fn search_prns(
+    i: &[i8],
+    q: Option<&[i8]>,
+    first_sample: u64,
+    prns: &[u8],
+    config: &AcquisitionConfig,
+) -> Result<Vec<SearchResult>> {
+    prns.par_iter()
+        .map_init(
+            || Acquisition::<2048>::new().map(Box::new),
+            |engine, &p| -> Result<SearchResult> {
+                let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
+                let prn = Prn::new(p).with_context(|| format!("PRN {p} out of range 1-32"))?;
+                Ok(engine.search(prn, i, q, first_sample, config)?)
+            },
+        )
+        .collect()
+}
+
+/// Runs every active channel over `block` (in parallel over channels) and hands each complete
+/// epoch to `on_epoch` with the channel's companion state `S`.
+///
+/// # Errors
+/// The first channel error (the block must continue the stream the channels have seen).
+pub fn track_block<const A: usize, S: Send>(
+    channels: &mut [(Channel<A>, S)],
+    block: &SampleBlock<'_, A>,
+    active: impl Fn(&S) -> bool + Sync,
+    on_epoch: impl Fn(&mut S, &TrackingEpoch<A>) + Sync,
+) -> Result<()> {
+    channels
+        .par_iter_mut()
+        .filter(|(_, s)| active(s))
+        .try_for_each(|(ch, s)| -> Result<()> {
+            let mut cursor = 0;
+            while cursor < block.len() {
+                if let Some(e) = ch.process(block, &mut cursor)? {
+                    on_epoch(s, &e);
+                }
+            }
+            Ok(())
+        })
 }

@@ -11,8 +11,11 @@
 //! * [`report`]: JSON summary, CSV time series, PNG plots, progress bars.
 //! * [`stats`]: small statistics helpers (RMS, percentiles, χ² intervals).
 //! * [`synth`]: the coherent three-antenna GPS L1 C/A sample synthesizer.
+//! * [`record`]: recorded sample files: layouts, streaming reader, `acquire` / `track` / `synth`
+//!   commands.
 
 pub mod chain;
+pub mod record;
 pub mod report;
 pub mod scenarios;
 pub mod stats;

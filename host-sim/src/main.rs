@@ -4,14 +4,20 @@
 //! host-sim                                   # the default scenario, files into out/
 //! host-sim list                              # scenarios and their variants
 //! host-sim run <scenario> [--variant V] [--seed N] [--json] [--out DIR]
+//! host-sim acquire --file F --format FMT --fs HZ [--if HZ] [--doppler-max HZ] [--json]
+//! host-sim track --file F [--file F2 --file F3] --format FMT --fs HZ [--seconds S]
+//!                [--baselines ... --sky CSV] [--json] [--out DIR]
+//! host-sim synth --out DIR --format FMT --fs HZ --seconds S [--antennas 3] [--leo]
 //! ```
 //! With `--json`, stdout carries exactly one JSON object; progress and logs go to stderr.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use anyhow::Context;
+use clap::{Args, Parser, Subcommand};
 
+use host_sim::record::{self, AcquireOptions, Dynamics, FileFormat, Recording, RecordingSpec};
 use host_sim::report::print_human;
 use host_sim::scenarios::{self, RunContext};
 
@@ -47,6 +53,164 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Acquisition on the first milliseconds of a recorded sample file.
+    Acquire {
+        #[command(flatten)]
+        file: FileArgs,
+        #[command(flatten)]
+        search: SearchArgs,
+        /// Print one JSON object on stdout instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Acquisition, then tracking of a recorded sample file for its length: per satellite C/N0,
+    /// lock time and Doppler over time; with three antennas, `--baselines` and `--sky`, the
+    /// attitude.
+    Track {
+        #[command(flatten)]
+        file: FileArgs,
+        #[command(flatten)]
+        search: SearchArgs,
+        /// Seconds to track (default: the whole recording).
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// Do not re-acquire satellites that lost lock.
+        #[arg(long)]
+        no_reacquire: bool,
+        /// Baselines of antennas 1 and 2 from antenna 0, body frame, m: 'x1,y1,z1;x2,y2,z2'.
+        #[arg(long)]
+        baselines: Option<String>,
+        /// Sky file (lines 'prn,azimuth_deg,elevation_deg'; NED reference frame).
+        #[arg(long)]
+        sky: Option<PathBuf>,
+        /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2'.
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        line_bias: Option<Vec<f64>>,
+        /// Attitude window, s.
+        #[arg(long, default_value_t = 1.0)]
+        attitude_window: f64,
+        /// Print one JSON object on stdout instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Directory for CSV rows and PNG plots.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Synthesize a recording (sample files, truth JSON, sky CSV) in any supported layout.
+    Synth {
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Base name of the files.
+        #[arg(long, default_value = "recording")]
+        name: String,
+        /// Layout (see `acquire --help`).
+        #[arg(long)]
+        format: String,
+        /// Sample rate, Hz.
+        #[arg(long)]
+        fs: f64,
+        /// Intermediate frequency, Hz (default 0 for complex layouts, fs/4 for real ones).
+        #[arg(long = "if")]
+        if_hz: Option<f64>,
+        /// Duration, s.
+        #[arg(long)]
+        seconds: f64,
+        /// Antennas: 1, or 3 (paper 003's 1.5 m triangle).
+        #[arg(long, default_value_t = 1)]
+        antennas: usize,
+        /// LEO dynamics (Dopplers within ±40 kHz, rates within ±60 Hz/s) instead of a static
+        /// ground receiver.
+        #[arg(long)]
+        leo: bool,
+        /// Number of satellites.
+        #[arg(long, default_value_t = 8)]
+        satellites: usize,
+        /// Lowest C/N0, dB-Hz.
+        #[arg(long, default_value_t = 40.0)]
+        cn0_min: f64,
+        /// Highest C/N0, dB-Hz.
+        #[arg(long, default_value_t = 50.0)]
+        cn0_max: f64,
+        /// Seed of the sky, data and noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+/// A recording on the command line.
+#[derive(Args)]
+struct FileArgs {
+    /// Sample file; give it once per antenna (antenna order) for single-channel layouts.
+    #[arg(long = "file", required = true)]
+    files: Vec<PathBuf>,
+    /// Layout: cs8, cs16[:S], int8, sm2, sm2iq, bit1, mc2xN, cs8xN, cs16xN[:S], int8xN (README
+    /// "Recorded sample files" documents the byte layouts).
+    #[arg(long)]
+    format: String,
+    /// Sample rate, Hz.
+    #[arg(long)]
+    fs: f64,
+    /// Intermediate frequency, Hz (required for real layouts; default 0 for complex ones).
+    #[arg(long = "if")]
+    if_hz: Option<f64>,
+    /// Channels of a multi-channel file used as antennas 0, 1, ... (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    channels: Option<Vec<usize>>,
+}
+
+impl FileArgs {
+    fn open(&self) -> anyhow::Result<Recording> {
+        let format = FileFormat::parse(&self.format)?;
+        Recording::open(&RecordingSpec {
+            paths: self.files.clone(),
+            format,
+            sample_rate_hz: self.fs,
+            intermediate_frequency_hz: self.if_hz,
+            channels: self.channels.clone(),
+        })
+    }
+}
+
+/// Acquisition settings on the command line.
+#[derive(Args)]
+struct SearchArgs {
+    /// Doppler search half-range, Hz (50000 for LEO recordings).
+    #[arg(long, default_value_t = 10_000.0)]
+    doppler_max: f64,
+    /// Doppler bin spacing, Hz.
+    #[arg(long, default_value_t = 500.0)]
+    doppler_step: f64,
+    /// Milliseconds summed non-coherently from the file's start (1-100).
+    #[arg(long, default_value_t = 20)]
+    ms: u16,
+    /// PRNs to search (comma-separated; default 1-32).
+    #[arg(long, value_delimiter = ',')]
+    prns: Option<Vec<u8>>,
+    /// False-alarm probability per PRN search.
+    #[arg(long, default_value_t = 1e-5)]
+    pfa: f64,
+    /// Antenna searched.
+    #[arg(long, default_value_t = 0)]
+    antenna: usize,
+    /// Margin of the cross-correlation test, dB (0 switches it off).
+    #[arg(long, default_value_t = 15.0)]
+    xcorr_margin_db: f64,
+}
+
+impl SearchArgs {
+    fn options(&self) -> AcquireOptions {
+        AcquireOptions {
+            doppler_max_hz: self.doppler_max,
+            doppler_step_hz: self.doppler_step,
+            ms: self.ms,
+            prns: self.prns.clone().unwrap_or_else(|| (1..=32).collect()),
+            false_alarm_probability: self.pfa,
+            antenna: self.antenna,
+            cross_correlation_margin_db: (self.xcorr_margin_db > 0.0)
+                .then_some(self.xcorr_margin_db),
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -63,6 +227,65 @@ fn main() -> ExitCode {
             json,
             out,
         }) => run(&scenario, variant.as_deref(), seed, json, out),
+        Some(Command::Acquire { file, search, json }) => acquire(&file, &search, json),
+        Some(Command::Track {
+            file,
+            search,
+            seconds,
+            no_reacquire,
+            baselines,
+            sky,
+            line_bias,
+            attitude_window,
+            json,
+            out,
+        }) => attitude_setup(
+            baselines.as_deref(),
+            sky.as_deref(),
+            line_bias,
+            attitude_window,
+        )
+        .and_then(|attitude| {
+            let opts = record::TrackOptions {
+                acquire: search.options(),
+                seconds,
+                reacquire: !no_reacquire,
+                attitude,
+                ..record::TrackOptions::default()
+            };
+            track(&file, &opts, json, out.as_deref())
+        }),
+        Some(Command::Synth {
+            out,
+            name,
+            format,
+            fs,
+            if_hz,
+            seconds,
+            antennas,
+            leo,
+            satellites,
+            cn0_min,
+            cn0_max,
+            seed,
+        }) => FileFormat::parse(&format).and_then(|format| {
+            synth(
+                &out,
+                &name,
+                &record::SynthSpec {
+                    format,
+                    sample_rate_hz: fs,
+                    intermediate_frequency_hz: if_hz,
+                    seconds,
+                    antennas,
+                    dynamics: if leo { Dynamics::Leo } else { Dynamics::Static },
+                    satellites,
+                    cn0_min_dbhz: cn0_min,
+                    cn0_max_dbhz: cn0_max,
+                    seed,
+                },
+            )
+        }),
         None => run(
             scenarios::DEFAULT_SCENARIO,
             None,
@@ -103,6 +326,91 @@ fn run(
         println!("{}", serde_json::to_string(&document)?);
     } else {
         print_human(&document, &outcome);
+    }
+    Ok(())
+}
+
+fn acquire(file: &FileArgs, search: &SearchArgs, json: bool) -> anyhow::Result<()> {
+    let rec = file.open()?;
+    let (report, _) = record::acquire(&rec, &search.options())?;
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        record::acquire::print_report(&report);
+    }
+    Ok(())
+}
+
+fn synth(out: &std::path::Path, name: &str, spec: &record::SynthSpec) -> anyhow::Result<()> {
+    let (truth, paths) = record::write_recording(out, name, spec)
+        .with_context(|| format!("synthesizing into {}", out.display()))?;
+    let files: Vec<String> = paths
+        .iter()
+        .map(|p| format!("--file {}", p.display()))
+        .collect();
+    eprintln!(
+        "synth: {} satellites, {:.3} s, {} ({}); truth in {}",
+        truth.satellites.len(),
+        truth.seconds,
+        truth.format,
+        truth.dynamics,
+        out.join(format!("{name}.truth.json")).display()
+    );
+    println!(
+        "{} --format {} --fs {} --if {}",
+        files.join(" "),
+        truth.format,
+        truth.sample_rate_hz,
+        truth.intermediate_frequency_hz
+    );
+    Ok(())
+}
+
+fn attitude_setup(
+    baselines: Option<&str>,
+    sky: Option<&std::path::Path>,
+    line_bias: Option<Vec<f64>>,
+    window_s: f64,
+) -> anyhow::Result<Option<record::attitude::AttitudeSetup>> {
+    let Some(baselines) = baselines else {
+        anyhow::ensure!(
+            sky.is_none() && line_bias.is_none(),
+            "--sky and --line-bias go with --baselines"
+        );
+        return Ok(None);
+    };
+    let sky = sky.context("--baselines needs --sky (the lines of sight)")?;
+    let text = std::fs::read_to_string(sky)
+        .with_context(|| format!("reading the sky file {}", sky.display()))?;
+    let bias = line_bias.unwrap_or_else(|| vec![0.0, 0.0]);
+    anyhow::ensure!(
+        bias.len() == 2 && bias.iter().all(|b| b.is_finite()),
+        "--line-bias needs two values (antennas 1 and 2, cycles)"
+    );
+    Ok(Some(record::attitude::AttitudeSetup {
+        baselines_body_m: record::attitude::parse_baselines(baselines)?,
+        line_bias_cycles: [bias[0], bias[1]],
+        sky: record::attitude::parse_sky(&text)
+            .with_context(|| format!("sky file {}", sky.display()))?,
+        window_s,
+    }))
+}
+
+fn track(
+    file: &FileArgs,
+    opts: &record::TrackOptions,
+    json: bool,
+    out: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
+    let rec = file.open()?;
+    let mut run = record::track(&rec, opts)?;
+    if let Some(dir) = out {
+        run.report.files_written = record::report::write_track_files(dir, &run)?;
+    }
+    if json {
+        println!("{}", serde_json::to_string(&run.report)?);
+    } else {
+        record::report::print_track(&run);
     }
     Ok(())
 }

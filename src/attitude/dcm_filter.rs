@@ -30,7 +30,8 @@ use crate::error::DcmError;
 use crate::geometry::nearest_rotation;
 use crate::{real, Real};
 
-use super::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use super::array::{AntennaArray, BaselinePair};
+use super::baseline_epoch::BaselineEpoch;
 use super::direction_cosine::{givens_inverse, ColumnChoice, DirectionCosineModel};
 use super::filter_estimate::{FilterEstimate, FilterHealth};
 

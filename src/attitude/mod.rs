@@ -1,5 +1,8 @@
 //! Attitude estimators: from measurements of the three antennas to `C_rb` with a covariance.
 //!
+//! The antenna array (three phase centres in body axes) is one type for every estimator:
+//! [`array::AntennaArray`].
+//!
 //! Frames: `C_rb` is the attitude (body to reference); paper 002's `A` is `C_br = C_rbᵀ`;
 //! paper 000's `M` is `C_rb` with ECEF as the reference. Lines of sight `s_j` are unit vectors
 //! from the antennas to satellite `j` in the reference frame; baselines `b_i` are from the base
@@ -36,6 +39,7 @@
 //!   forms, lock detector, optional line-bias states.
 
 pub mod ambiguity;
+pub mod array;
 pub mod baseline_epoch;
 pub mod dcm_filter;
 pub mod direction_cosine;

@@ -35,7 +35,8 @@ use crate::error::DcmError;
 use crate::geometry::{log_so3, Quaternion};
 use crate::{real, Real};
 
-use super::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use super::array::{AntennaArray, BaselinePair};
+use super::baseline_epoch::BaselineEpoch;
 use super::dcm_filter::{symmetrize, DcmFilterConfig, DirectionCosineFilter};
 use super::direction_cosine::ColumnChoice;
 use super::filter_estimate::{FilterEstimate, FilterHealth};

@@ -33,7 +33,8 @@ use crate::error::DcmError;
 use crate::geometry::{skew, Quaternion};
 use crate::{real, Real};
 
-use super::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use super::array::{AntennaArray, BaselinePair};
+use super::baseline_epoch::BaselineEpoch;
 use super::dcm_filter::symmetrize;
 use super::filter_estimate::{FilterEstimate, FilterHealth};
 

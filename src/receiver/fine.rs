@@ -51,7 +51,7 @@ impl FineStage {
         epoch: u64,
     ) -> Result<Self, ReceiverError> {
         let [a, b, c] = config.antenna_positions();
-        let array = AntennaArray::new(a, b, c).map_err(|_| ReceiverError::InvalidConfig)?;
+        let array = AntennaArray::new([a, b, c]).map_err(|_| ReceiverError::InvalidConfig)?;
         let prior = prior_at_identity(covariance, config.prior_rate_sigma, rates)?;
         let filter = OneStageFilter::new(config.fine, array, &prior).map_err(map_error)?;
         // F = C_rK₀ M = C_rb at this epoch: C_rK₀ = C_rb Mᵀ

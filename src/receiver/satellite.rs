@@ -121,7 +121,7 @@ impl BitMonitor {
         let mut anomaly = false;
         if let Some(last) = self.last_epoch {
             let gap = epoch.saturating_sub(last);
-            if gap >= 1 && gap <= BIT_GAP && (self.last_i > 0.0) != (i_a > 0.0) {
+            if (1..=BIT_GAP).contains(&gap) && (self.last_i > 0.0) != (i_a > 0.0) {
                 let (best, best_count, second) = self.peak();
                 let learned = best_count >= 8.0 && best_count >= 4.0 * second;
                 let near = |p: u64| {

@@ -14,6 +14,9 @@
 //!    `|Σ_k Z_k² e^{−j2π(2δ)kT}|` over `δ ∈ ±250 Hz` (1 Hz grid, parabolic peak) gives the
 //!    residual Doppler `δ` to about 1 Hz. A 1 ms FLL cannot do this at 35 dB-Hz: its
 //!    discriminator noise is ~90 Hz rms per update, far above the PLL's ±6 Hz lock-in range.
+//!    With [`ChannelConfig::max_doppler_rate_hz_s`] > 0 (LEO, [`ChannelConfig::leo`]) the
+//!    same squares also give the Doppler rate ([`refine_frequency_and_rate`]): the loop then
+//!    starts with that rate and the Doppler extrapolated to the next epoch.
 //! 2. **Pull-in** (`pull_in_ms`): the FLL-assisted PLL starts at the refined Doppler (FLL
 //!    assist and DLL wide).
 //! 3. **Tracking**: FLL assist and DLL narrow (by default a pure PLL).
@@ -25,7 +28,9 @@ use super::cn0::PowerWindow;
 pub use super::config::ChannelConfig;
 use super::lock::{BitSync, LockDetector};
 use super::loops::{costas_cycles, dll_chips, dll_correction, fll_hz, CarrierLoop};
-pub use super::refine::{refine_frequency, REFINEMENT_EPOCHS, REFINEMENT_RANGE_HZ};
+pub use super::refine::{
+    refine_frequency, refine_frequency_and_rate, REFINEMENT_EPOCHS, REFINEMENT_RANGE_HZ,
+};
 use crate::error::TrackingError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::correlator::{Correlator, EpochCorrelations, Iq};
@@ -268,8 +273,13 @@ impl<const A: usize> Channel<A> {
                 *z = [i * i - q * q, 2.0 * i * q];
             }
             if self.index as usize + 1 >= REFINEMENT_EPOCHS {
-                let delta = refine_frequency(&self.squares, t);
-                self.carrier = CarrierLoop::new(self.acquired_doppler + delta);
+                // Residual at the window's centre (epoch (n − 1)/2) and rate; the next epoch is
+                // n − (n − 1)/2 epochs after the centre.
+                let (delta, rate) =
+                    refine_frequency_and_rate(&self.squares, t, cfg.max_doppler_rate_hz_s);
+                let ahead = 0.5 * (REFINEMENT_EPOCHS as f32 + 1.0) * t;
+                self.carrier =
+                    CarrierLoop::with_rate(self.acquired_doppler + delta + rate * ahead, rate);
                 self.state = ChannelState::PullIn;
                 self.carrier.frequency_hz()
             } else {

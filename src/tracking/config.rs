@@ -35,6 +35,10 @@ pub struct ChannelConfig {
     pub cn0_lock_threshold_dbhz: f32,
     /// Phase-lock indicator threshold (≈ cos 2Δφ).
     pub pld_threshold: f32,
+    /// Largest Doppler rate the frequency refinement estimates, Hz/s (0: no rate estimate, the
+    /// loop starts with rate 0, as suits a ground receiver). Receivers in low Earth orbit see
+    /// up to about ±60 Hz/s on GPS L1; see [`ChannelConfig::leo`].
+    pub max_doppler_rate_hz_s: f32,
 }
 
 impl ChannelConfig {
@@ -57,6 +61,17 @@ impl ChannelConfig {
             cn0_window: 1000,
             cn0_lock_threshold_dbhz: 26.0,
             pld_threshold: 0.5,
+            max_doppler_rate_hz_s: 0.0,
+        }
+    }
+
+    /// [`ChannelConfig::new`] with the Doppler-rate estimate of the refinement stage enabled up
+    /// to ±150 Hz/s (LEO dynamics: the carrier loop starts with the estimated rate and the
+    /// Doppler extrapolated to the end of the refinement window).
+    pub fn leo(sample_rate_hz: f64, intermediate_frequency_hz: f64) -> Self {
+        Self {
+            max_doppler_rate_hz_s: 150.0,
+            ..Self::new(sample_rate_hz, intermediate_frequency_hz)
         }
     }
 
@@ -78,19 +93,19 @@ impl ChannelConfig {
             self.dll_bandwidth_hz,
             self.cn0_lock_threshold_dbhz,
             self.pld_threshold,
+            self.max_doppler_rate_hz_s,
         ];
         if v.iter().any(|x| !x.is_finite()) {
             return Err(TrackingError::NonFinite);
         }
         let bw_ok = |b: f32| (0.0..=100.0).contains(&b);
-        if !(bw_ok(self.pll_bandwidth_hz)
+        let bandwidths_ok = bw_ok(self.pll_bandwidth_hz)
             && bw_ok(self.fll_pull_in_bandwidth_hz)
             && bw_ok(self.fll_bandwidth_hz)
             && bw_ok(self.dll_pull_in_bandwidth_hz)
-            && bw_ok(self.dll_bandwidth_hz))
-            || self.lock_window == 0
-            || self.cn0_window == 0
-        {
+            && bw_ok(self.dll_bandwidth_hz);
+        let rate_ok = (0.0..=1000.0).contains(&self.max_doppler_rate_hz_s);
+        if !bandwidths_ok || !rate_ok || self.lock_window == 0 || self.cn0_window == 0 {
             return Err(TrackingError::InvalidConfig);
         }
         Ok(())

@@ -69,6 +69,14 @@ impl CarrierLoop {
         }
     }
 
+    /// A loop at `doppler_hz` with frequency rate `rate_hz_s` (Doppler-rate aiding).
+    pub fn with_rate(doppler_hz: f32, rate_hz_s: f32) -> Self {
+        Self {
+            rate: rate_hz_s,
+            frequency: doppler_hz,
+        }
+    }
+
     /// The Doppler estimate, Hz.
     pub fn frequency_hz(&self) -> f32 {
         self.frequency

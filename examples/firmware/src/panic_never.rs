@@ -13,7 +13,8 @@ use cortex_m_rt::entry;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
 use gnss_attitude::geometry::{nearest_rotation, Euler321, Paper003Angles, Quaternion};
 use gnss_attitude::selftest::run_ekf_self_test;
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch};
+use gnss_attitude::attitude::array::AntennaArray;
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use gnss_attitude::attitude::multi_structure::{fuse, MultiStructureFilter};
@@ -24,14 +25,17 @@ use gnss_attitude::gyro::{
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
 };
 use gnss_attitude::attitude::one_stage::{
-    satellite_terms, AntennaArray as OneStageArray, BesselRatio, FilterMode, OneStageConfig, OneStageFilter, Prior,
+    observation_from_epoch, satellite_terms, AdapterConfig, AntennaMapping, BesselRatio, EpochClock,
+    ObservationAdapter, PhaseDifferences, FilterMode, OneStageConfig, OneStageFilter, Prior,
     SatelliteObservation, MAX_SATELLITES,
 };
 use gnss_attitude::frontend::nt1065::{Nt1065, Nt1065Config};
-use gnss_attitude::signal::{Correlator, CorrelatorConfig, Prn, SampleBlock, SampleFormat};
+use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
 use gnss_attitude::tracking::acquisition::detection_threshold;
-use gnss_attitude::tracking::channel::refine_frequency;
-use gnss_attitude::tracking::{Acquisition, AcquisitionConfig, Channel, ChannelConfig, SearchResult};
+use gnss_attitude::tracking::channel::{refine_frequency, refine_frequency_and_rate};
+use gnss_attitude::tracking::{
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, LockFlags, SearchResult, TrackingEpoch,
+};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 extern "C" {
@@ -223,7 +227,7 @@ fn one_stage() {
     let _ = black_box(BesselRatio::at(black_box(61.0f32)));
     let z = black_box([nalgebra::Complex::new(1.0f32, 2.0); 3]);
     let _ = black_box(satellite_terms(&z, &v(), black_box(10.0)));
-    let Ok(array) = OneStageArray::new(v(), v() * 2.0, v() + nalgebra::Vector3::x()) else {
+    let Ok(array) = AntennaArray::new([v(), v() * 2.0, v() + nalgebra::Vector3::x()]) else {
         return;
     };
     let prior = match Prior::from_attitude(&black_box(Matrix3::identity()), &black_box(Matrix3::identity()), black_box(0.01)) {
@@ -240,8 +244,10 @@ fn one_stage() {
         let _ = black_box(f.step(epoch));
         let _ = black_box(f.information(epoch));
         let _ = black_box(f.reinitialize(&prior));
+        let _ = black_box(f.reopen_line_biases(black_box(0.25)));
         let _ = black_box((f.angles(), f.rates(), f.line_bias(), f.angle_covariance(), f.lock_status()));
     }
+    one_stage_adapter();
     let mut beta = config;
     beta.estimate = black_box(gnss_attitude::attitude::one_stage::EstimatedAngles::BETA_ONLY);
     beta.line_bias_states = black_box(false);
@@ -254,6 +260,67 @@ fn one_stage() {
 }
 
 
+
+/// The adapter from the tracking channels, the epoch grid and the cold start on opaque data.
+#[inline(never)]
+fn one_stage_adapter() {
+    use gnss_attitude::attitude::snapshot::{SnapshotQuality, SnapshotSolution};
+    let Some(prn) = Prn::new(black_box(5)) else { return };
+    let tap = || Taps {
+        early: Iq { i: black_box(1), q: black_box(2) },
+        prompt: Iq { i: black_box(3), q: black_box(4) },
+        late: Iq { i: black_box(5), q: black_box(6) },
+        noise: Iq { i: black_box(7), q: black_box(8) },
+    };
+    let epoch: TrackingEpoch<3> = black_box(TrackingEpoch {
+        prn,
+        index: black_box(9),
+        correlations: EpochCorrelations {
+            taps: [tap(), tap(), tap()],
+            samples: black_box(2600),
+            first_sample: black_box(1),
+            code_phase_at_first: black_box(0),
+            carrier_phase_at_first: black_box(0),
+            complete: black_box(true),
+        },
+        doppler_hz: black_box(0.0),
+        cn0_dbhz: black_box(40.0),
+        lock: black_box(LockFlags::default()),
+        state: black_box(ChannelState::Tracking),
+        phase_error_cycles: black_box(0.0),
+        code_error_chips: black_box(0.0),
+        data_bit: black_box(None),
+    });
+    let los: [f32; 3] = black_box([0.0, 0.6, 0.8]);
+    let mapping: AntennaMapping = black_box(AntennaMapping::default());
+    let _ = black_box(observation_from_epoch(&epoch, los, black_box([1.0, 2.0, 3.0]), &mapping));
+    let config: AdapterConfig = black_box(AdapterConfig { mapping, ..AdapterConfig::default() });
+    if let Ok(mut adapter) = ObservationAdapter::new(config) {
+        let _ = black_box(adapter.observe(&epoch, los));
+        let _ = black_box(adapter.noise().variance(black_box(10)));
+        adapter.reset_noise();
+    }
+    if let Ok(clock) = EpochClock::new(black_box(u64::MAX - 3), black_box(2600)) {
+        let _ = black_box(clock.epoch_of(&epoch.correlations));
+        let _ = black_box(clock.sample_of(black_box(u64::MAX)));
+    }
+    let mut d = PhaseDifferences::new();
+    let obs: SatelliteObservation<f32> = black_box(SatelliteObservation::default());
+    let _ = black_box(d.add(&obs));
+    let _ = black_box(d.phase_satellite(black_box(1e-3), black_box(0.01)));
+    let solution: SnapshotSolution<f32> = black_box(SnapshotSolution {
+        c_rb: Matrix3::identity(),
+        q_rb: Quaternion::identity(),
+        euler: Euler321::default(),
+        covariance: Matrix3::identity(),
+        residual_rms: 0.0,
+        chi_square: 0.0,
+        dof: 1,
+        iterations: 1,
+        quality: SnapshotQuality::Good,
+    });
+    let _ = black_box(Prior::from_snapshot(&solution, black_box(0.01)));
+}
 
 /// An SPI device whose bus does nothing (the driver's code paths are what is checked).
 struct OpaqueSpi;
@@ -311,7 +378,8 @@ fn signal_chain() {
             let mut cursor = black_box(0);
             let _ = black_box(c.run(&block, &mut cursor));
         }
-        let ch_cfg = ChannelConfig::new(black_box(2.6e6), black_box(0.0));
+        let mut ch_cfg = ChannelConfig::new(black_box(2.6e6), black_box(0.0));
+        ch_cfg.max_doppler_rate_hz_s = black_box(150.0);
         if let Ok(mut ch) = Channel::<3>::new(prn, &ch_cfg) {
             let acq = SearchResult {
                 prn,
@@ -340,6 +408,7 @@ fn signal_chain() {
     }
     let squares: [[f32; 2]; 8] = black_box([[1.0, 0.0]; 8]);
     let _ = black_box(refine_frequency(&squares, black_box(1e-3)));
+    let _ = black_box(refine_frequency_and_rate(&squares, black_box(1e-3), black_box(150.0)));
     let _ = black_box(detection_threshold(black_box(10), black_box(1e5), black_box(1e-3)));
     let mut fe = Nt1065::new(OpaqueSpi);
     let _ = black_box(fe.configure(&black_box(Nt1065Config::three_antenna_l1())));

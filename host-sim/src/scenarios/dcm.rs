@@ -19,7 +19,7 @@ mod metrics;
 mod runs;
 pub mod truth;
 
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselinePair};
+use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use gnss_attitude::attitude::multi_structure::STRUCTURE_PAIRS;
 use nalgebra::Vector3;

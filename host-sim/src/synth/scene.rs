@@ -71,6 +71,8 @@ pub enum AttitudeMotion {
         /// Body rate, body axes, rad/s.
         omega_b: Vector3<f64>,
     },
+    /// `C_rb(t)` given by a function of time (s), e.g. a scenario's own motion law.
+    Function(fn(f64) -> Matrix3<f64>),
 }
 
 impl AttitudeMotion {
@@ -81,6 +83,7 @@ impl AttitudeMotion {
             Self::ConstantRate { c_rb0, omega_b } => {
                 c_rb0 * Rotation3::from_scaled_axis(omega_b * t).into_inner()
             }
+            Self::Function(f) => f(t),
         }
     }
 }
@@ -206,6 +209,7 @@ impl Scene {
         let t0 = k0 as f64 / fs;
         let t_mid = (k0 as f64 + 0.5 * n as f64) / fs;
         let dt = 1.0 / fs;
+        let mut values = vec![0.0f64; n];
         for (si, s) in self.satellites.iter().enumerate() {
             let amp = self.amplitude(si)
                 * if fe.complex {
@@ -221,15 +225,20 @@ impl Scene {
             let carr_rate = (tr_mid.carrier_phase_cycles - tr0.carrier_phase_cycles) / half;
             let phase0 = tr0.carrier_phase_cycles + fe.intermediate_frequency_hz * t0;
             let dphi = (carr_rate + fe.intermediate_frequency_hz) * dt;
-            let (mut pr, mut pi) = {
-                let a = std::f64::consts::TAU * phase0.rem_euclid(1.0);
+            // Four interleaved carrier phasors (samples k ≡ r mod 4), each advanced by w⁴:
+            // four independent recurrences instead of one long dependency chain.
+            let phasor = |a: f64| {
+                let a = std::f64::consts::TAU * a.rem_euclid(1.0);
                 (a.cos(), a.sin())
             };
-            let (wr, wi) = {
-                let a = std::f64::consts::TAU * dphi;
-                (a.cos(), a.sin())
-            };
-            // Code phase in 32.32 fixed point (own implementation), epoch count for data.
+            let mut pr = [0.0f64; 4];
+            let mut pi = [0.0f64; 4];
+            for r in 0..4 {
+                (pr[r], pi[r]) = phasor(phase0 + r as f64 * dphi);
+            }
+            let (wr, wi) = phasor(4.0 * dphi);
+            // Code phase in 32.32 fixed point (own implementation), epoch count for data:
+            // first the code × data × amplitude of every sample.
             let total = tr0.code_chips_total;
             let mut epoch = (total / 1023.0).floor() as i64;
             let mut cph = ((total - 1023.0 * epoch as f64) * 4_294_967_296.0) as u64;
@@ -237,24 +246,29 @@ impl Scene {
             const WRAP: u64 = 1023u64 << 32;
             let code = &codes[si];
             let mut bit = data_bit(s.data_seed, epoch);
-            for k in 0..n {
+            for v in values.iter_mut().take(n) {
                 let chip = code[((cph >> 32) as usize).min(1022)];
-                let v = amp * f64::from(chip * bit);
-                if fe.complex {
-                    out_i[k] += (v * pr) as f32;
-                    out_q[k] += (v * pi) as f32;
-                } else {
-                    out_i[k] += (v * pr) as f32;
-                }
-                // Advance the carrier phasor and the code.
-                let r = pr * wr - pi * wi;
-                pi = pr * wi + pi * wr;
-                pr = r;
+                *v = amp * f64::from(chip * bit);
                 cph += cstep;
                 if cph >= WRAP {
                     cph -= WRAP;
                     epoch += 1;
                     bit = data_bit(s.data_seed, epoch);
+                }
+            }
+            // Then the carrier, four samples at a time.
+            for (c, vals) in values[..n].chunks(4).enumerate() {
+                for (r, &v) in vals.iter().enumerate() {
+                    let k = 4 * c + r;
+                    out_i[k] += (v * pr[r]) as f32;
+                    if fe.complex {
+                        out_q[k] += (v * pi[r]) as f32;
+                    }
+                }
+                for r in 0..4 {
+                    let x = pr[r] * wr - pi[r] * wi;
+                    pi[r] = pr[r] * wi + pi[r] * wr;
+                    pr[r] = x;
                 }
             }
         }

@@ -7,14 +7,15 @@ use crate::ekf::Ekf;
 use crate::geometry::Paper003Angles;
 use crate::{OneStageError, Real};
 
-use super::array::{AntennaArray, PhaseModel};
 use super::config::{FilterMode, OneStageConfig};
 use super::information::{epoch_information, EpochInformation, PARAMETERS};
 use super::input::{CheckedObservation, SatelliteObservation, MAX_SATELLITES};
 use super::layout::StateLayout;
 use super::linalg::{el, regularized_solve, set, wrap};
 use super::lock::{LockDetector, LockStatus};
+use super::phase::PhaseModel;
 use super::prior::Prior;
+use crate::attitude::array::AntennaArray;
 
 /// What one epoch did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,8 +69,10 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
     ///
     /// # Errors
     /// [`OneStageError::InvalidConfig`] when [`OneStageConfig::is_valid`] fails or `N` is not
-    /// the dimension the configuration needs ([`StateLayout::dimension`]); the errors of the
-    /// prior ([`OneStageError::NonFiniteInput`], [`OneStageError::InvalidCovariance`]).
+    /// the dimension the configuration needs ([`StateLayout::dimension`]);
+    /// [`OneStageError::DegenerateArray`] when the antennas span no plane
+    /// ([`AntennaArray::check_spans_plane`]); the errors of the prior
+    /// ([`OneStageError::NonFiniteInput`], [`OneStageError::InvalidCovariance`]).
     pub fn new(
         config: OneStageConfig<T>,
         array: AntennaArray<T>,
@@ -79,6 +82,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         if !config.is_valid() || layout.dimension != N {
             return Err(OneStageError::InvalidConfig);
         }
+        array.check_spans_plane()?;
         let (ekf, held) = Self::initial_state(&layout, prior, config.line_bias_states)?;
         Ok(Self {
             lock: LockDetector::new(&config.lock, config.epoch_s),
@@ -102,6 +106,35 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         self.held = held;
         self.lock.restart();
         Ok(())
+    }
+
+    /// Forgets what the filter knows about the line biases (after the front end re-locked and
+    /// the inter-channel phases jumped), keeping the attitude and its rates: the bias states'
+    /// covariance rows and columns are cleared and their variances set to `variance` (rad²).
+    /// The constant-gain loop has no covariance; its bias loop re-converges by itself. A
+    /// filter without bias states is left as it is.
+    ///
+    /// # Errors
+    /// [`OneStageError::NonFiniteInput`], [`OneStageError::InvalidCovariance`] for a variance
+    /// that is not positive; the filter is then unchanged.
+    pub fn reopen_line_biases(&mut self, variance: T) -> Result<(), OneStageError> {
+        if !variance.is_finite() {
+            return Err(OneStageError::NonFiniteInput);
+        }
+        if !(variance > T::zero()) {
+            return Err(OneStageError::InvalidCovariance);
+        }
+        let mut p = *self.ekf.covariance();
+        for idx in self.layout.parameter.iter().skip(3).flatten() {
+            for k in 0..N {
+                set(&mut p, *idx, k, T::zero());
+                set(&mut p, k, *idx, T::zero());
+            }
+            set(&mut p, *idx, *idx, variance);
+        }
+        self.ekf
+            .set_covariance(p)
+            .map_err(|_| OneStageError::InvalidCovariance)
     }
 
     fn initial_state(

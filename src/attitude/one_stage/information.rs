@@ -7,9 +7,9 @@ use nalgebra::{Matrix2x5, Matrix3, SMatrix, SVector, Vector3};
 
 use crate::{real, Real};
 
-use super::array::PhaseModel;
 use super::discriminator::{difference_basis, floored_plane_curvature, satellite_terms};
 use super::input::CheckedObservation;
+use super::phase::PhaseModel;
 
 /// Number of parameters the discriminators act on: α, β, γ, `b_B`, `b_C`.
 pub const PARAMETERS: usize = 5;

@@ -26,6 +26,24 @@
 //! Output: the angles α, β, γ (hence `C_rb`), their rates, optional line biases `b_B`, `b_C`,
 //! the covariance (Gaussian mode) and an [`EpochReport`] with the lock verdict.
 //!
+//! # From the signal chain (samples → attitude)
+//!
+//! The [`adapter`] turns the tracking channels' [`TrackingEpoch`](crate::tracking::TrackingEpoch)s
+//! into observations ([`ObservationAdapter`]: antenna mapping, sign of Q, per-antenna noise
+//! normalization from the noise taps, lock and C/N0 gating) and groups them into filter epochs
+//! ([`EpochClock`]). A cold start averages the inter-antenna phases ([`PhaseDifferences`]),
+//! solves them with the snapshot solver's ambiguity resolver and starts from
+//! [`Prior::from_snapshot`]. Per receiver:
+//!
+//! ```text
+//! let mut adapter = ObservationAdapter::new(AdapterConfig::default())?;
+//! let clock = EpochClock::new(first_sample, samples_per_ms)?;
+//! // every TrackingEpoch e of every channel, with its satellite's line of sight:
+//! if let Some(obs) = adapter.observe(&e, los)? { epochs[clock.epoch_of(&e.correlations)?].push(obs) }
+//! // once per filter epoch k, in order (empty when nothing arrived):
+//! let report = filter.step(&epochs[k])?;  // use filter.attitude() when report.status == Locked
+//! ```
+//!
 //! # The two update forms
 //!
 //! * **Gaussian approximation** (eqs. (9)–(12)). The information update uses the observed
@@ -64,8 +82,11 @@
 //! information is independent of the biases), which the filter recovers over time because the
 //! biases are constant while the attitude moves.
 
-mod array;
+pub mod adapter;
+#[cfg(test)]
+mod adapter_tests;
 pub mod bessel;
+mod cold_start;
 mod config;
 pub mod discriminator;
 mod filter;
@@ -74,6 +95,7 @@ mod input;
 mod layout;
 mod linalg;
 pub mod lock;
+mod phase;
 mod prior;
 mod trig;
 mod update;
@@ -81,8 +103,13 @@ mod update;
 #[cfg(test)]
 mod tests;
 
-pub use array::{paper003_partials, Antenna, AntennaArray, PhaseModel};
+pub use crate::attitude::array::{Antenna, AntennaArray};
+pub use adapter::{
+    observation_from_epoch, AdapterConfig, AntennaMapping, EpochClock, NoiseFloor,
+    ObservationAdapter, QuadratureSign,
+};
 pub use bessel::BesselRatio;
+pub use cold_start::PhaseDifferences;
 pub use config::{EstimatedAngles, FilterMode, OneStageConfig, ProcessNoise, GPS_L1_WAVELENGTH_M};
 pub use discriminator::{
     coherent_sum, difference_basis, floored_plane_curvature, satellite_terms, PromptIq,
@@ -93,4 +120,5 @@ pub use information::{EpochInformation, PARAMETERS};
 pub use input::{SatelliteObservation, MAX_SATELLITES};
 pub use layout::StateLayout;
 pub use lock::{LockConfig, LockDetector, LockStatus};
+pub use phase::{paper003_partials, PhaseModel};
 pub use prior::Prior;

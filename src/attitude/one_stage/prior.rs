@@ -3,10 +3,11 @@
 
 use nalgebra::{Cholesky, Matrix3, Vector3};
 
+use crate::attitude::snapshot::{SnapshotQuality, SnapshotSolution};
 use crate::geometry::{vee, Paper003Angles};
 use crate::{real, OneStageError, Real};
 
-use super::array::paper003_partials;
+use super::phase::paper003_partials;
 
 /// Mean and covariance the filter starts from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -89,6 +90,24 @@ impl<T: Real> Prior<T> {
         Ok(prior)
     }
 
+    /// The cold-start prior from the snapshot solver (paper 002): its attitude and its
+    /// covariance (body-frame rotation vector, the Cramér–Rao bound of that epoch) through
+    /// [`Self::from_attitude`]; rates zero with `rate_sigma` (rad/s); line biases zero with
+    /// variance (π/2)² (the snapshot's phases contain the biases unless they were calibrated).
+    ///
+    /// # Errors
+    /// [`OneStageError::UnusableSnapshot`] unless the solution's quality is
+    /// [`SnapshotQuality::Good`]; otherwise as [`Self::from_attitude`].
+    pub fn from_snapshot(
+        solution: &SnapshotSolution<T>,
+        rate_sigma: T,
+    ) -> Result<Self, OneStageError> {
+        if solution.quality != SnapshotQuality::Good {
+            return Err(OneStageError::UnusableSnapshot);
+        }
+        Self::from_attitude(&solution.c_rb, &solution.covariance, rate_sigma)
+    }
+
     /// Checks finiteness and definiteness of the parts the filter will use.
     pub(crate) fn check(&self, with_bias: bool) -> Result<(), OneStageError> {
         let finite = [self.angles.alpha, self.angles.beta, self.angles.gamma]
@@ -145,5 +164,31 @@ mod tests {
             Prior::from_attitude(&rot_x(0.1), &(-cov), 0.01),
             Err(OneStageError::InvalidCovariance)
         );
+    }
+
+    #[test]
+    fn a_snapshot_solution_is_a_prior_only_when_good() {
+        let u = Paper003Angles::<f64>::new(0.1, 0.2, -0.3).to_dcm();
+        let mut s = SnapshotSolution {
+            c_rb: u,
+            q_rb: crate::geometry::Quaternion::identity(),
+            euler: crate::geometry::Euler321::default(),
+            covariance: Matrix3::identity() * 1e-4,
+            residual_rms: 0.001,
+            chi_square: 10.0,
+            dof: 13,
+            iterations: 3,
+            quality: SnapshotQuality::Good,
+        };
+        let p = Prior::from_snapshot(&s, 0.01).unwrap();
+        assert_eq!(p, Prior::from_attitude(&u, &s.covariance, 0.01).unwrap());
+        assert!((p.angles.gamma + 0.3).abs() < 1e-12);
+        for q in [SnapshotQuality::ResidualHigh, SnapshotQuality::NotConverged] {
+            s.quality = q;
+            assert_eq!(
+                Prior::from_snapshot(&s, 0.01),
+                Err(OneStageError::UnusableSnapshot)
+            );
+        }
     }
 }

@@ -127,6 +127,16 @@ fn invalid_configuration_and_prior_are_rejected() {
         OneStageFilter::<f32, 8>::new(good, array, &prior).err(),
         Some(OneStageError::InvalidConfig)
     );
+    // three collinear antennas are an array (paper 000 takes them) but not a one-stage array
+    let line = AntennaArray::new([Vector3::zeros(), Vector3::x(), Vector3::x() * 2.0]).unwrap();
+    assert_eq!(
+        OneStageFilter::<f32, 6>::new(good, line, &prior).err(),
+        Some(OneStageError::DegenerateArray)
+    );
+    assert_eq!(
+        AntennaArray::<f32>::paper_triangle(0.0).map_err(OneStageError::from),
+        Err(OneStageError::DegenerateArray)
+    );
     let mut bad_prior = prior;
     bad_prior.angle_covariance.m22 = -1.0;
     assert_eq!(
@@ -143,4 +153,43 @@ fn invalid_configuration_and_prior_are_rejected() {
     assert_eq!(f, before);
     // an empty epoch only predicts
     assert_eq!(f.step(&[]).unwrap().satellites, 0);
+}
+
+#[test]
+fn reopening_the_line_biases_keeps_the_attitude_and_forgets_only_the_biases() {
+    let mut config = OneStageConfig::<f64>::gps_l1(FilterMode::GaussianApproximation, 2.0);
+    config.line_bias_states = true;
+    let array = AntennaArray::paper_triangle(1.5).unwrap();
+    let prior = Prior::new(Paper003Angles::new(0.0, 0.0, 0.0), 0.01, 0.001);
+    let mut f = OneStageFilter::<f64, 8>::new(config, array, &prior).unwrap();
+    let obs = observations(&Paper003Angles::new(0.001, -0.002, 0.001), 8);
+    for _ in 0..500 {
+        f.step(&obs).unwrap();
+    }
+    let (bb, bc) = (
+        f.layout.parameter[3].unwrap(),
+        f.layout.parameter[4].unwrap(),
+    );
+    let beta = f.layout.parameter[1].unwrap();
+    let p0 = *f.ekf.covariance();
+    assert!(p0[(bb, bb)] < 0.01 && p0[(bb, beta)].abs() > 0.0);
+    let (angles, rates) = (f.angles(), f.rates());
+    let before = f.clone();
+    assert_eq!(
+        f.reopen_line_biases(-1.0),
+        Err(OneStageError::InvalidCovariance)
+    );
+    assert_eq!(
+        f.reopen_line_biases(f64::NAN),
+        Err(OneStageError::NonFiniteInput)
+    );
+    assert_eq!(f, before);
+    f.reopen_line_biases(0.25).unwrap();
+    let p = f.ekf.covariance();
+    assert_eq!((p[(bb, bb)], p[(bc, bc)]), (0.25, 0.25));
+    assert_eq!((p[(bb, beta)], p[(beta, bc)], p[(bb, bc)]), (0.0, 0.0, 0.0));
+    assert_eq!(p[(beta, beta)], p0[(beta, beta)]);
+    assert_eq!((f.angles(), f.rates()), (angles, rates));
+    // and the filter goes on
+    f.step(&obs).unwrap();
 }

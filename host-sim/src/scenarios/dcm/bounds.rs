@@ -22,7 +22,7 @@
 //!   with the same baselines; reported for comparison, it is not the bound of a Doppler-driven
 //!   filter.
 
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselinePair};
+use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 /// Skew matrix `[v]×` (host-side copy).

@@ -2,7 +2,8 @@
 //! statistics against the truth.
 
 use anyhow::anyhow;
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch};
+use gnss_attitude::attitude::array::AntennaArray;
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::ColumnChoice;
 use gnss_attitude::attitude::filter_estimate::{FilterEstimate, FilterHealth};

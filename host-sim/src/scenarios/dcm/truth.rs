@@ -12,7 +12,8 @@
 //! `V_ij = (M(t_k) − M(t_{k−1})) b_ij / Δt + N(0, σ_v² I)`: the central difference of the
 //! noise-free baseline for the middle of the step.
 
-use gnss_attitude::attitude::baseline_epoch::{AntennaArray, BaselineEpoch, BaselinePair};
+use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
+use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};

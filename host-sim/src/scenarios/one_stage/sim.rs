@@ -10,6 +10,7 @@ use gnss_attitude::geometry::Paper003Angles;
 use nalgebra::Matrix3;
 
 use super::bound::{information_rate, information_rate_three_angles, loop_bound_arcmin};
+use super::samples::SampleLevel;
 use super::source::{EpochSource, IqFastPath, EPOCH_S};
 use super::truth::{rotation_about_y, sky_g1, Motion, SIDE_M, WAVELENGTH_M};
 
@@ -22,6 +23,9 @@ pub const PRIOR_RATE_SIGMA: f64 = 0.005;
 pub enum InputPath {
     /// Correlator outputs synthesized directly ([`IqFastPath`]).
     IqFastPath,
+    /// Three-antenna samples through the core's correlators, tracking and adapter
+    /// ([`SampleLevel`]).
+    SampleLevel,
 }
 
 /// Everything one run needs.
@@ -182,12 +186,19 @@ fn wrap(a: f64) -> f64 {
     }
 }
 
-/// Runs the filter of `cfg` for `cfg.duration_s` on data drawn with `seed`.
+/// Runs the filter of `cfg` for `cfg.duration_s` on data drawn with `seed` by `cfg.input`.
 pub fn simulate(cfg: &RunConfig, seed: u64) -> anyhow::Result<RunResult> {
     let sky = sky_g1(cfg.satellites);
     let source: Box<dyn EpochSource> = match cfg.input {
         InputPath::IqFastPath => Box::new(IqFastPath::new(&sky, cfg.cn0_dbhz, cfg.line_bias, seed)),
+        InputPath::SampleLevel => Box::new(SampleLevel::new(cfg, seed)?),
     };
+    simulate_with(cfg, source)
+}
+
+/// Runs the filter of `cfg` for `cfg.duration_s` on the observations of `source` (whose truth
+/// must be `cfg`'s; `cfg.input` is not used).
+pub fn simulate_with(cfg: &RunConfig, source: Box<dyn EpochSource>) -> anyhow::Result<RunResult> {
     let mut config = OneStageConfig::<f32>::gps_l1(cfg.mode, cfg.loop_bandwidth_hz as f32);
     config.wavelength_m = WAVELENGTH_M as f32;
     config.epoch_s = EPOCH_S as f32;
@@ -235,7 +246,7 @@ fn run<const N: usize>(
         let t = k as f64 * EPOCH_S;
         let beta = cfg.motion.beta(t);
         let c_rb: Matrix3<f64> = rotation_about_y(beta);
-        source.epoch(t, &c_rb, &mut obs);
+        source.epoch(t, &c_rb, &mut obs)?;
         let report = filter.step(&obs).map_err(|e| anyhow!("epoch {k}: {e}"))?;
         let t_end = t + EPOCH_S;
         err_arcmin = wrap(f64::from(filter.angles().beta) - beta).to_degrees() * 60.0;

@@ -1,28 +1,17 @@
 //! Where the filter's per-epoch input comes from.
 //!
 //! [`EpochSource`] is the seam between the truth and the core filter: given the true attitude
-//! of one epoch, it returns the [`SatelliteObservation`]s the receiver would hand over. Phase 1
-//! has one source, [`IqFastPath`], which synthesizes the prompt correlator outputs directly with
-//! the statistics of an ideal correlator. The sample-level path (three-antenna samples → the
-//! core's fixed-point correlators and tracking → the same observations) will be a second
-//! implementation of the trait, driven by the same loop.
+//! of one epoch, it returns the [`SatelliteObservation`]s the receiver would hand over. Two
+//! sources implement it:
 //!
-//! # What the sample-level source needs from the signal chain
-//!
-//! * Per 1 ms code epoch and tracked PRN: the prompt I and Q of antennas A, B, C from one
-//!   shared replica (one code and carrier NCO), in one integer scale; which physical channel is
-//!   A, B, C; the sign convention of Q (the filter wants `Z ∝ e^{+jφ}`; the adapter negates Q
-//!   otherwise).
-//! * The noise variance of one component in the same scale (the noise tap), per antenna: the
-//!   likelihood assumes equal SNR on the three antennas, so an adapter divides each antenna's
-//!   I/Q by its own noise standard deviation when the front-end gains differ.
-//! * The C/N0 estimate, and carrier-lock and code-lock flags (unlocked channels are left out);
-//!   bit sync is not needed (`X_i` ignores the data bit) as long as epochs are code periods.
-//! * A receiver time tag per epoch and a way to tell missed epochs (the filter then predicts
-//!   with an empty epoch), so that the line of sight (ephemeris and receiver position, not the
-//!   chain's job) and `T` are right.
-//! * A notice when the front end's synthesizer re-locks (the line biases jump; the filter's
-//!   bias variance must be reopened by re-initialization).
+//! * [`IqFastPath`] (here) synthesizes the prompt correlator outputs directly with the
+//!   statistics of an ideal correlator: cheap, for Monte Carlo.
+//! * [`SampleLevel`](super::samples::SampleLevel) synthesizes the three antennas' samples and
+//!   runs the core's acquisition, fixed-point correlators and tracking channels, then the
+//!   core's adapter ([`gnss_attitude::attitude::one_stage::ObservationAdapter`],
+//!   [`gnss_attitude::attitude::one_stage::EpochClock`]): samples → correlators → filter.
+//!   [`Replay`](super::samples::Replay) plays a recorded sample-level run back, so that
+//!   several filters see the same observations.
 
 use gnss_attitude::attitude::one_stage::{PromptIq, SatelliteObservation};
 use nalgebra::Matrix3;
@@ -34,9 +23,17 @@ use super::truth::{phases, Satellite};
 
 /// Produces one epoch's observations from the truth.
 pub trait EpochSource {
-    /// The observations of the epoch starting at `t` seconds with true attitude `c_rb`
+    /// The observations of filter epoch `t` seconds (`t = k·T`) with true attitude `c_rb`
     /// (body to reference), written into `out` (cleared first).
-    fn epoch(&mut self, t: f64, c_rb: &Matrix3<f64>, out: &mut Vec<SatelliteObservation<f32>>);
+    ///
+    /// # Errors
+    /// A failure of the signal chain (sample-level sources).
+    fn epoch(
+        &mut self,
+        t: f64,
+        c_rb: &Matrix3<f64>,
+        out: &mut Vec<SatelliteObservation<f32>>,
+    ) -> anyhow::Result<()>;
 }
 
 /// Noise standard deviation of each correlator component, in "counts": an arbitrary scale,
@@ -101,7 +98,12 @@ impl IqFastPath {
 }
 
 impl EpochSource for IqFastPath {
-    fn epoch(&mut self, t: f64, c_rb: &Matrix3<f64>, out: &mut Vec<SatelliteObservation<f32>>) {
+    fn epoch(
+        &mut self,
+        t: f64,
+        c_rb: &Matrix3<f64>,
+        out: &mut Vec<SatelliteObservation<f32>>,
+    ) -> anyhow::Result<()> {
         out.clear();
         for ch in &mut self.channels {
             if t >= ch.next_edge {
@@ -129,5 +131,6 @@ impl EpochSource for IqFastPath {
                 cn0_dbhz: self.cn0_dbhz as f32,
             });
         }
+        Ok(())
     }
 }

@@ -1,101 +1,14 @@
-//! The signal geometry of paper 003: three antennas in body axes, the rotation `U(α)` of
-//! eq. (2), the phase offsets `ψ_{P,i}(α)` of eqs. (4)/(24) and their Jacobian `∂Ψ/∂α` of
-//! eqs. (25)–(28).
+//! The signal geometry of paper 003: the rotation `U(α)` of eq. (2), the phase offsets
+//! `ψ_{P,i}(α)` of eqs. (4)/(24) of the antennas of an [`AntennaArray`] and their Jacobian
+//! `∂Ψ/∂α` of eqs. (25)–(28).
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::attitude::array::AntennaArray;
 use crate::geometry::Paper003Angles;
-use crate::{real, OneStageError, Real};
+use crate::Real;
 
 use super::trig::sin_cos;
-
-/// The three antennas, in the order of the paper: A, B, C.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Antenna {
-    /// Antenna A (index 0).
-    A,
-    /// Antenna B (index 1).
-    B,
-    /// Antenna C (index 2).
-    C,
-}
-
-/// Phase centres of the antennas A, B, C relative to the array origin `O_c`, in body axes
-/// (the triangle frame `O_c X_c Y_c Z_c` of paper 003), metres: the vectors
-/// `r_P = L_{PO_c} 1_{PO_c,c}` of eq. (4).
-///
-/// Any three non-collinear points are accepted. The origin is where the common carrier phase
-/// is referred to; because that phase is averaged out (eq. (15)), the attitude estimate does
-/// not depend on the choice of origin, only the filter's internal phases do.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AntennaArray<T = f32> {
-    positions: [Vector3<T>; 3],
-}
-
-impl<T: Real> AntennaArray<T> {
-    /// An array from the positions of A, B, C in body axes, metres.
-    ///
-    /// # Errors
-    /// [`OneStageError::NonFiniteInput`] for a non-finite coordinate;
-    /// [`OneStageError::DegenerateArray`] when the triangle's area is below 1e-6 of its longest
-    /// side squared (coincident or collinear antennas).
-    pub fn new(a: Vector3<T>, b: Vector3<T>, c: Vector3<T>) -> Result<Self, OneStageError> {
-        if !a
-            .iter()
-            .chain(b.iter())
-            .chain(c.iter())
-            .all(|v| v.is_finite())
-        {
-            return Err(OneStageError::NonFiniteInput);
-        }
-        let (ab, ac, bc) = (b - a, c - a, c - b);
-        let longest = ab.norm().max(ac.norm()).max(bc.norm());
-        let twice_area = ab.cross(&ac).norm();
-        if !(longest > T::zero()) || !(twice_area > real::<T>(2e-6) * longest * longest) {
-            return Err(OneStageError::DegenerateArray);
-        }
-        Ok(Self {
-            positions: [a, b, c],
-        })
-    }
-
-    /// The array of the paper's simulation: an equilateral triangle of side `side_m` metres
-    /// with `O_c` at the middle of AB, `X_c` pointing to B and `Y_c` to C (spec erratum 9):
-    /// `A = (−l/2, 0, 0)`, `B = (l/2, 0, 0)`, `C = (0, l√3/2, 0)`. C then lies on the `Y_c`
-    /// axis, so a rotation about `Y_c` moves only A and B.
-    ///
-    /// # Errors
-    /// [`OneStageError::DegenerateArray`] for a side that is not positive and finite.
-    pub fn paper_triangle(side_m: T) -> Result<Self, OneStageError> {
-        if !side_m.is_finite() || !(side_m > T::zero()) {
-            return Err(OneStageError::DegenerateArray);
-        }
-        let half = side_m * real(0.5);
-        let height = side_m * real::<T>(0.75).sqrt();
-        let o = T::zero();
-        Self::new(
-            Vector3::new(-half, o, o),
-            Vector3::new(half, o, o),
-            Vector3::new(o, height, o),
-        )
-    }
-
-    /// Position of one antenna in body axes, metres.
-    pub fn position(&self, antenna: Antenna) -> Vector3<T> {
-        let [a, b, c] = self.positions;
-        match antenna {
-            Antenna::A => a,
-            Antenna::B => b,
-            Antenna::C => c,
-        }
-    }
-
-    /// Positions of A, B, C in body axes, metres.
-    pub fn positions(&self) -> &[Vector3<T>; 3] {
-        &self.positions
-    }
-}
 
 /// `∂U/∂α`, `∂U/∂β`, `∂U/∂γ` of eq. (2) as printed, `U = R_z(γ) R_y(β) R_x'(α)` with the
 /// passive `R_x'(α) = R_x(−α)`.
@@ -183,37 +96,6 @@ mod tests {
     fn los(az_deg: f64, el_deg: f64) -> Vector3<f64> {
         let (az, el) = (az_deg.to_radians(), el_deg.to_radians());
         Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin())
-    }
-
-    #[test]
-    fn paper_triangle_is_equilateral_with_c_on_the_y_axis() {
-        let arr = AntennaArray::<f64>::paper_triangle(1.5).unwrap();
-        let [a, b, c] = *arr.positions();
-        for d in [(b - a).norm(), (c - a).norm(), (c - b).norm()] {
-            assert!((d - 1.5).abs() < 1e-12);
-        }
-        assert!(((a + b) * 0.5).norm() < 1e-15, "O_c at the middle of AB");
-        assert!(c.x.abs() < 1e-15 && c.z.abs() < 1e-15 && c.y > 0.0);
-        assert!(b.x > 0.0, "X_c points to B");
-    }
-
-    #[test]
-    fn degenerate_arrays_are_rejected() {
-        let z = Vector3::<f32>::zeros();
-        let x = Vector3::x();
-        assert_eq!(
-            AntennaArray::new(z, x, x * 2.0),
-            Err(OneStageError::DegenerateArray)
-        );
-        assert_eq!(
-            AntennaArray::new(z, z, x),
-            Err(OneStageError::DegenerateArray)
-        );
-        assert_eq!(
-            AntennaArray::new(z, x, Vector3::new(f32::NAN, 0.0, 0.0)),
-            Err(OneStageError::NonFiniteInput)
-        );
-        assert!(AntennaArray::<f32>::paper_triangle(-1.0).is_err());
     }
 
     #[test]

@@ -1,0 +1,309 @@
+//! `host-sim acquire`: the core's acquisition ([`gnss_attitude::tracking::Acquisition`]) over
+//! the first milliseconds of a recording, every PRN searched in parallel.
+//!
+//! The detection threshold is the core's (Gamma tail of the non-coherent sum for the stated
+//! false-alarm probability per PRN search, noise only). Strong satellites add a second source
+//! of false peaks the noise model does not cover: the Gold-code cross-correlation (at most
+//! −23.9 dB of the strong signal's power at equal Doppler, and near multiples of 1 kHz from it
+//! through the code's 1 ms period). A detection whose Doppler lies within one bin of such a
+//! frequency of a stronger detection, and whose signal part of the metric (metric − 1) is
+//! more than [`AcquireOptions::cross_correlation_margin_db`] below the stronger one's, is
+//! reported as `rejected_cross_correlations` instead of as a detection.
+
+use std::time::Instant;
+
+use anyhow::{ensure, Context, Result};
+use gnss_attitude::tracking::acquisition::MAX_DOPPLER_BINS;
+use gnss_attitude::tracking::{AcquisitionConfig, SearchResult};
+use serde::Serialize;
+
+use super::reader::Recording;
+use crate::chain::search_prns;
+
+/// Acquisition settings of the file commands.
+#[derive(Clone, Debug)]
+pub struct AcquireOptions {
+    /// Doppler search half-range, Hz.
+    pub doppler_max_hz: f64,
+    /// Doppler bin spacing, Hz.
+    pub doppler_step_hz: f64,
+    /// Milliseconds summed non-coherently (from the file's start).
+    pub ms: u16,
+    /// PRNs searched.
+    pub prns: Vec<u8>,
+    /// False-alarm probability per PRN search (noise only).
+    pub false_alarm_probability: f64,
+    /// Antenna searched (0 = the reference antenna).
+    pub antenna: usize,
+    /// Cross-correlation test margin, dB (`None`: no test).
+    pub cross_correlation_margin_db: Option<f64>,
+}
+
+impl Default for AcquireOptions {
+    /// ±10 kHz in 500 Hz bins, 20 ms, PRN 1–32, P_fa = 10⁻⁵, antenna 0, 15 dB margin (20 ms:
+    /// at 10 ms a 40 dB-Hz satellite straddling a code and a Doppler bin sits near the
+    /// threshold, see the README).
+    fn default() -> Self {
+        Self {
+            doppler_max_hz: 10_000.0,
+            doppler_step_hz: 500.0,
+            ms: 20,
+            prns: (1..=32).collect(),
+            false_alarm_probability: 1e-5,
+            antenna: 0,
+            cross_correlation_margin_db: Some(15.0),
+        }
+    }
+}
+
+/// A detected satellite.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Detection {
+    /// PRN.
+    pub prn: u8,
+    /// Doppler, Hz.
+    pub doppler_hz: f64,
+    /// Code phase at the file's first sample, chips in `[0, 1023)`.
+    pub code_phase_chips: f64,
+    /// Peak cell over the mean cell.
+    pub metric: f64,
+}
+
+/// A peak over the threshold explained as the cross-correlation of a stronger satellite.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Rejected {
+    /// PRN searched.
+    pub prn: u8,
+    /// Doppler of the peak, Hz.
+    pub doppler_hz: f64,
+    /// Peak metric.
+    pub metric: f64,
+    /// The stronger satellite.
+    pub stronger_prn: u8,
+}
+
+/// What `acquire` reports (`--json` prints it as one object).
+#[derive(Clone, Debug, Serialize)]
+pub struct AcquireReport {
+    /// The files.
+    pub files: Vec<String>,
+    /// Layout.
+    pub format: String,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Intermediate frequency, Hz.
+    pub intermediate_frequency_hz: f64,
+    /// Antennas in the recording.
+    pub antennas: usize,
+    /// Duration of the recording, s.
+    pub recording_s: f64,
+    /// Antenna searched.
+    pub antenna: usize,
+    /// Milliseconds summed non-coherently.
+    pub noncoherent_ms: u16,
+    /// Doppler search half-range, Hz.
+    pub doppler_max_hz: f64,
+    /// Doppler bin spacing, Hz.
+    pub doppler_step_hz: f64,
+    /// False-alarm probability per PRN search.
+    pub false_alarm_probability: f64,
+    /// Detection threshold on the metric.
+    pub threshold: f64,
+    /// PRNs searched.
+    pub searched_prns: Vec<u8>,
+    /// Detected satellites, by PRN.
+    pub detections: Vec<Detection>,
+    /// Peaks rejected as cross-correlations of stronger satellites.
+    pub rejected_cross_correlations: Vec<Rejected>,
+    /// Wall time of the search (reading and decoding excluded), s.
+    pub search_s: f64,
+}
+
+impl AcquireOptions {
+    /// The core's configuration for `rec`, with `ms` milliseconds.
+    ///
+    /// # Errors
+    /// A Doppler range or step the core's engine does not take.
+    pub fn config(&self, rec: &Recording, ms: u16) -> Result<AcquisitionConfig> {
+        let (max, step) = (self.doppler_max_hz, self.doppler_step_hz);
+        ensure!(
+            max.is_finite() && max >= 0.0,
+            "--doppler-max {max} Hz must be ≥ 0"
+        );
+        ensure!(
+            step.is_finite() && step >= 10.0,
+            "--doppler-step {step} Hz must be ≥ 10 Hz"
+        );
+        let bins = 2 * (max / step).floor() as usize + 1;
+        ensure!(
+            bins <= MAX_DOPPLER_BINS,
+            "--doppler-max {max} Hz in {step} Hz steps is {bins} bins; the engine takes at most {MAX_DOPPLER_BINS} (e.g. ±100 kHz in 500 Hz steps)"
+        );
+        ensure!(
+            (1..=100).contains(&ms),
+            "--ms {ms}: the acquisition sums 1-100 ms"
+        );
+        ensure!(
+            self.false_alarm_probability > 0.0 && self.false_alarm_probability < 0.5,
+            "false-alarm probability {} must be in (0, 0.5)",
+            self.false_alarm_probability
+        );
+        Ok(AcquisitionConfig {
+            sample_rate_hz: rec.sample_rate_hz,
+            intermediate_frequency_hz: rec.intermediate_frequency_hz,
+            doppler_max_hz: max as f32,
+            doppler_step_hz: step as f32,
+            noncoherent_ms: ms,
+            false_alarm_probability: self.false_alarm_probability as f32,
+        })
+    }
+}
+
+/// Runs the acquisition on the first milliseconds of `rec`. Returns the report and the core's
+/// search results of the accepted detections (for the tracking hand-over).
+///
+/// # Errors
+/// Bad options, a recording shorter than one code period (plus one sample), I/O errors.
+pub fn acquire(
+    rec: &Recording,
+    opts: &AcquireOptions,
+) -> Result<(AcquireReport, Vec<SearchResult>)> {
+    ensure!(
+        opts.antenna < rec.antenna_count(),
+        "--antenna {} does not exist (the recording has {})",
+        opts.antenna,
+        rec.antenna_count()
+    );
+    let period = rec.sample_rate_hz * 1e-3;
+    // Whole milliseconds the file holds with the one extra sample the search reads.
+    let available = ((rec.instants.saturating_sub(1)) as f64 / period).floor() as u64;
+    ensure!(
+        available >= 1,
+        "the recording ({} samples) is shorter than one code period plus one sample",
+        rec.instants
+    );
+    let ms = u64::from(opts.ms).min(available) as u16;
+    if ms < opts.ms {
+        eprintln!(
+            "acquire: the recording holds {available} ms: summing {ms} ms instead of {}",
+            opts.ms
+        );
+    }
+    let config = opts.config(rec, ms)?;
+    let needed = config.samples_needed();
+    let unit = rec.format.unit().0;
+    let request = needed.div_ceil(unit) * unit;
+    let mut reader = rec.reader()?;
+    let block = reader
+        .read(request)?
+        .context("the recording holds no samples")?;
+    ensure!(
+        block.len() >= needed,
+        "read {} samples, the search needs {needed}",
+        block.len()
+    );
+    let i = &block.i[opts.antenna];
+    let q = block.complex.then(|| &block.q[opts.antenna][..]);
+    let started = Instant::now();
+    let results = search_prns(i, q, 0, &opts.prns, &config)?;
+    let search_s = started.elapsed().as_secs_f64();
+    let threshold = results.first().map_or(f64::NAN, |r| f64::from(r.threshold));
+    let (accepted, rejected) = split_cross_correlations(&results, opts);
+    let detections = accepted
+        .iter()
+        .map(|r| Detection {
+            prn: r.prn.number(),
+            doppler_hz: f64::from(r.doppler_hz),
+            code_phase_chips: f64::from(r.code_phase_chips),
+            metric: f64::from(r.metric),
+        })
+        .collect();
+    let report = AcquireReport {
+        files: rec.paths.iter().map(|p| p.display().to_string()).collect(),
+        format: rec.format.name(),
+        sample_rate_hz: rec.sample_rate_hz,
+        intermediate_frequency_hz: rec.intermediate_frequency_hz,
+        antennas: rec.antenna_count(),
+        recording_s: rec.seconds(),
+        antenna: opts.antenna,
+        noncoherent_ms: ms,
+        doppler_max_hz: opts.doppler_max_hz,
+        doppler_step_hz: opts.doppler_step_hz,
+        false_alarm_probability: opts.false_alarm_probability,
+        threshold,
+        searched_prns: opts.prns.clone(),
+        detections,
+        rejected_cross_correlations: rejected,
+        search_s,
+    };
+    Ok((report, accepted))
+}
+
+/// Detected results split into accepted ones (by PRN) and cross-correlation rejections (see
+/// the module documentation).
+pub fn split_cross_correlations(
+    results: &[SearchResult],
+    opts: &AcquireOptions,
+) -> (Vec<SearchResult>, Vec<Rejected>) {
+    let mut detected: Vec<SearchResult> = results.iter().filter(|r| r.detected).copied().collect();
+    detected.sort_by(|a, b| b.metric.total_cmp(&a.metric));
+    let mut accepted: Vec<SearchResult> = Vec::new();
+    let mut rejected = Vec::new();
+    for r in detected {
+        let culprit = opts.cross_correlation_margin_db.and_then(|margin| {
+            accepted.iter().find(|s| {
+                let df = f64::from(r.doppler_hz - s.doppler_hz).abs();
+                let ratio_db = 10.0
+                    * (f64::from(s.metric - 1.0) / f64::from(r.metric - 1.0).max(1e-9)).log10();
+                df <= opts.doppler_step_hz && ratio_db > margin
+            })
+        });
+        match culprit {
+            Some(s) => rejected.push(Rejected {
+                prn: r.prn.number(),
+                doppler_hz: f64::from(r.doppler_hz),
+                metric: f64::from(r.metric),
+                stronger_prn: s.prn.number(),
+            }),
+            None => accepted.push(r),
+        }
+    }
+    accepted.sort_by_key(|r| r.prn.number());
+    (accepted, rejected)
+}
+
+/// The human table of a report.
+pub fn print_report(r: &AcquireReport) {
+    println!(
+        "acquisition: {} ({}, {:.4} Msps, IF {:.1} kHz, {} antenna(s), {:.3} s), antenna {}, {} ms non-coherent, ±{:.0} Hz in {:.0} Hz bins, threshold {:.3} (P_fa {:e} per PRN), {:.2} s",
+        r.files.join(" + "),
+        r.format,
+        r.sample_rate_hz / 1e6,
+        r.intermediate_frequency_hz / 1e3,
+        r.antennas,
+        r.recording_s,
+        r.antenna,
+        r.noncoherent_ms,
+        r.doppler_max_hz,
+        r.doppler_step_hz,
+        r.threshold,
+        r.false_alarm_probability,
+        r.search_s
+    );
+    println!("  PRN   Doppler (Hz)   code phase (chip)   metric");
+    for d in &r.detections {
+        println!(
+            "  {:3}   {:12.1}   {:17.3}   {:6.2}",
+            d.prn, d.doppler_hz, d.code_phase_chips, d.metric
+        );
+    }
+    if r.detections.is_empty() {
+        println!("  (none)");
+    }
+    for x in &r.rejected_cross_correlations {
+        println!(
+            "  PRN {} at {:.0} Hz (metric {:.2}) rejected: cross-correlation of PRN {}",
+            x.prn, x.doppler_hz, x.metric, x.stronger_prn
+        );
+    }
+}

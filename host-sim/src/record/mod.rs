@@ -1,0 +1,30 @@
+//! Recorded sample files from real front ends: reading them in every supported layout, and
+//! running the core's signal chain on them (`host-sim acquire`, `host-sim track`), plus the
+//! synthesized recordings that test it (`host-sim synth`).
+//!
+//! * [`format`](mod@format): the `--format` names and byte layouts (single- and multi-channel).
+//! * [`reader`]: validation with clear errors, and streaming block reads (bounded memory).
+//! * [`acquire`](mod@acquire): acquisition over the first milliseconds.
+//! * [`track`](mod@track): acquisition, tracking with re-acquisition, per-satellite reports.
+//! * [`satellite`]: per-satellite state and summaries of `track`, thermal C/N0.
+//! * [`report`]: the human table, CSV and PNG files of `track`.
+//! * [`attitude`]: three-antenna recordings through the ambiguity resolver and the snapshot
+//!   attitude solver.
+//! * [`attitude_setup`]: `--baselines`, `--sky`, `--line-bias`.
+//! * [`synthesize`]: synthesized recordings with their truth.
+
+pub mod acquire;
+pub mod attitude;
+pub mod attitude_setup;
+pub mod format;
+pub mod reader;
+pub mod report;
+pub mod satellite;
+pub mod synthesize;
+pub mod track;
+
+pub use acquire::{acquire, AcquireOptions, AcquireReport, Detection};
+pub use format::FileFormat;
+pub use reader::{Recording, RecordingSpec};
+pub use synthesize::{write_recording, Dynamics, RecordingTruth, SynthSpec};
+pub use track::{track, TrackOptions, TrackReport};

@@ -1,0 +1,94 @@
+//! The scenario's files: run 0's time series (CSV) and the plot of its errors.
+
+use super::sim::{RunResult, Sample};
+use crate::report::{plot_panels, write_csv, Panel, Series};
+
+/// The CSV of run 0 of each filter form on the headline path and the plot of its errors
+/// (with the I/Q fast path's run 0 of the Gaussian form when the headline is sample-level).
+pub fn write_files(
+    dir: &std::path::Path,
+    variant: &str,
+    path: &str,
+    gauss: &RunResult,
+    cg: &RunResult,
+    iq_gauss: Option<&RunResult>,
+    bound: f64,
+) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    let stem = format!("one_stage_{}", variant.replace('.', "_"));
+    let csv = dir.join(format!("{stem}_run0.csv"));
+    write_csv(
+        &csv,
+        &[
+            "t_s",
+            "err_gaussian_arcmin",
+            "sigma_gaussian_arcmin",
+            "alignment_gaussian",
+            "status_gaussian",
+            "err_constant_gain_arcmin",
+            "alignment_constant_gain",
+            "status_constant_gain",
+        ],
+        gauss.samples.iter().zip(&cg.samples).map(|(a, b)| {
+            [
+                a.t,
+                a.error_arcmin,
+                a.sigma_arcmin,
+                a.alignment,
+                f64::from(a.status),
+                b.error_arcmin,
+                b.alignment,
+                f64::from(b.status),
+            ]
+        }),
+    )?;
+    let pts = |r: &RunResult, f: fn(&Sample) -> f64| -> Vec<(f64, f64)> {
+        r.samples.iter().map(|s| (s.t, f(s))).collect()
+    };
+    let t_end = gauss.samples.last().map_or(0.0, |s| s.t);
+    let mut errors = vec![
+        Series::line(
+            format!("Gaussian approximation ({path})"),
+            pts(gauss, |s| s.error_arcmin),
+            0,
+        ),
+        Series::line(
+            format!("constant gain ({path})"),
+            pts(cg, |s| s.error_arcmin),
+            2,
+        ),
+    ];
+    if let Some(iq) = iq_gauss {
+        errors.push(Series::line(
+            "Gaussian approximation (I/Q fast path)",
+            pts(iq, |s| s.error_arcmin),
+            3,
+        ));
+    }
+    errors.push(Series::bound(
+        "± bound",
+        vec![(0.0, bound), (t_end, bound)],
+        1,
+    ));
+    errors.push(Series::bound("", vec![(0.0, -bound), (t_end, -bound)], 1));
+    let panels = vec![
+        Panel {
+            y_label: "β̂ − β (arc-min)".into(),
+            series: errors,
+        },
+        Panel {
+            y_label: "alignment η̄".into(),
+            series: vec![
+                Series::line("Gaussian approximation", pts(gauss, |s| s.alignment), 0),
+                Series::line("constant gain", pts(cg, |s| s.alignment), 2),
+            ],
+        },
+    ];
+    let png = dir.join(format!("{stem}_error.png"));
+    plot_panels(
+        &png,
+        &format!("one-stage {variant}: tracking error of β ({path}), run 0"),
+        "time (s)",
+        &panels,
+    )?;
+    Ok(vec![csv, png])
+}
