@@ -127,6 +127,12 @@ impl EmulatedChannel {
         self.state = ChannelState::Tracking;
     }
 
+    /// Puts the channel's data-bit edges at the receiver epochs `≡ offset (mod 20)` (the
+    /// edges the sample-level chain's satellite had, so that the hand-over is seamless).
+    pub fn align_bit_edges(&mut self, offset: u64) {
+        self.bit_offset = offset % 20;
+    }
+
     /// Schedules a data-bit transition at the wrong moment: half a bit after the channel's
     /// first bit edge at or after `after` (s), 0.7 ms into that code period; returns its time.
     pub fn schedule_bit_flip(&mut self, after: f64) -> f64 {

@@ -72,6 +72,9 @@ pub struct FlightMetrics {
     pub gyro_bias_error: Vector3<f64>,
     /// True gyro bias at the end, °/h.
     pub gyro_bias_truth: Vector3<f64>,
+    /// The converged receiver attitude split by input path: (RMS error, RMS bound, samples)
+    /// while the sample-level chain fed the receiver, and on the fast path after it.
+    pub by_path: [(Vector3<f64>, Vector3<f64>, usize); 2],
 }
 
 fn rms_max<'a>(
@@ -211,7 +214,17 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
             after_fix.iter().map(|s| s.tracked).max().unwrap_or(0),
         )
     };
+    let split = |on_samples: bool| {
+        let part: Vec<&&Sample> = converged
+            .iter()
+            .filter(|s| has(s) && (s.t < record.sample_level_s) == on_samples)
+            .collect();
+        let (rms, _, n) = rms_max(part.iter().map(|s| &s.error));
+        let (b, _, _) = rms_max(part.iter().map(|s| &s.bound));
+        (rms, b, n)
+    };
     FlightMetrics {
+        by_path: [split(true), split(false)],
         ttff_s: ttff,
         fine_lock_s: fine_lock,
         converged_from_s: from,

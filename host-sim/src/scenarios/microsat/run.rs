@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 
 use anyhow::Result;
+use gnss_attitude::attitude::one_stage::SatelliteObservation;
 use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::receiver::{
     AttitudeReceiver, AttitudeSource, GyroConfig, ReceiverConfig, ReceiverEvent, SatelliteAiding,
@@ -13,7 +14,8 @@ use gnss_attitude::receiver::{
 use nalgebra::{Matrix3, Vector3};
 
 use super::bound::bound_rad;
-use super::fast_path::{rng, EmulatedChannel, PhaseTransient, EPOCH_S};
+use super::fast_path::{rng, ChannelState, EmulatedChannel, PhaseTransient, EPOCH_S};
+use super::sample_level::{SampleLevel, SampleStats};
 use super::world::{Blockage, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
@@ -56,6 +58,9 @@ pub struct FlightConfig {
     pub seed: u64,
     /// Fine loop bandwidth, Hz.
     pub loop_bandwidth_hz: f32,
+    /// The first stretch run through the sample-level chain ([`super::sample_level`]), s
+    /// (0: the fast path from the start).
+    pub sample_level_s: f64,
 }
 
 /// One record (every [`RECORD_S`]).
@@ -142,6 +147,10 @@ pub struct FlightRecord {
     pub calibration: Option<gnss_attitude::receiver::CalibrationReport>,
     /// Wall time of the sample-level part and of the fast path, s.
     pub wall_s: (f64, f64),
+    /// What the sample-level stretch saw (`None` without one).
+    pub sample_stats: Option<SampleStats>,
+    /// Length of the sample-level stretch, s.
+    pub sample_level_s: f64,
 }
 
 /// `log(Ĉᵀ C)`: the body-frame rotation vector from the estimate to the truth, rad.
@@ -198,8 +207,8 @@ fn interpolate(a: &GpsView, b: &GpsView, f: f64) -> GpsView {
     v
 }
 
-/// Runs one flight on the fast path from `t = 0` (the sample-level stretch is added by the
-/// caller in `sample_level.rs`).
+/// Runs one flight: the sample-level chain for the first [`FlightConfig::sample_level_s`],
+/// then the fast path from the channels it hands over.
 pub fn fly(
     config: &FlightConfig,
     progress: Option<&indicatif::ProgressBar>,
@@ -219,7 +228,21 @@ pub fn fly(
     for e in world.sky.almanac.entries.iter().filter(|e| e.health == 0) {
         channels.insert(e.prn, EmulatedChannel::new(e.prn, &mut rng));
     }
-    let mut record = FlightRecord::default();
+    let mut record = FlightRecord {
+        sample_level_s: config.sample_level_s,
+        ..FlightRecord::default()
+    };
+    let sample_epochs = (config.sample_level_s / EPOCH_S).round() as u64;
+    let mut sample_level = if sample_epochs > 0 {
+        Some(SampleLevel::new(
+            &world,
+            config.sample_level_s + 0.5,
+            config.seed,
+        )?)
+    } else {
+        None
+    };
+    let mut delivered: Vec<SatelliteObservation<f32>> = Vec::new();
     let epochs = (config.duration_s / EPOCH_S).round() as u64;
     let per_block = (AIDING_S / EPOCH_S).round() as u64;
     let mut views: (Vec<GpsView>, Vec<GpsView>) = (Vec::new(), Vec::new());
@@ -229,6 +252,22 @@ pub fn fly(
     for k in 0..epochs {
         let t0 = k as f64 * EPOCH_S;
         let tc = t0 + 0.5 * EPOCH_S;
+        if k == sample_epochs {
+            // hand-over: the chain's locked satellites continue on the fast path
+            if let Some(sl) = sample_level.take() {
+                for prn in sl.locked() {
+                    if let Some(ch) = channels.get_mut(&prn) {
+                        ch.continue_tracking();
+                        if let Some(edge) = sl.next_bit_edge_epoch(prn, t0) {
+                            ch.align_bit_edges(edge);
+                        }
+                    }
+                }
+                record.sample_stats = Some(sl.stats().clone());
+                record.wall_s.0 = started.elapsed().as_secs_f64();
+            }
+        }
+        let in_samples = k < sample_epochs;
         // gyro: the increment over [t0 − h, t0] before the epoch starting at t0
         let gyro_every = (GYRO_H / EPOCH_S).round() as u64;
         if k > 0 && k % gyro_every == 0 {
@@ -292,6 +331,9 @@ pub fn fly(
             if before != sees && k > 0 {
                 record.horizon.push((tc, s.view.prn, sees));
             }
+            if in_samples {
+                continue;
+            }
             if let Some(ch) = channels.get_mut(&s.view.prn) {
                 ch.advance(tc, s.visible[0]);
             }
@@ -300,10 +342,11 @@ pub fn fly(
         if k % per_block == 0 {
             let mut wanted: Vec<&SatTruth> = truths
                 .iter()
-                .filter(|s| {
-                    channels
+                .filter(|s| match &sample_level {
+                    Some(sl) if in_samples => sl.has_channel(s.view.prn),
+                    _ => channels
                         .get(&s.view.prn)
-                        .is_some_and(|c| c.state != super::fast_path::ChannelState::Idle)
+                        .is_some_and(|c| c.state != ChannelState::Idle),
                 })
                 .collect();
             wanted.sort_by(|a, b| b.elevation[0].total_cmp(&a.elevation[0]));
@@ -336,7 +379,18 @@ pub fn fly(
         // observations
         let line_bias = world.line_bias_rad;
         let mut tracked = 0;
-        for s in &truths {
+        delivered.clear();
+        if let (Some(sl), true) = (sample_level.as_mut(), in_samples) {
+            sl.observations(k, &mut delivered)?;
+        }
+        for obs in &delivered {
+            match receiver.push_observation(k, obs) {
+                Ok(()) => tracked += 1,
+                Err(gnss_attitude::ReceiverError::NoAiding) => {}
+                Err(e) => anyhow::bail!("observation: {e}"),
+            }
+        }
+        for s in truths.iter().filter(|_| !in_samples) {
             let Some(ch) = channels.get_mut(&s.view.prn) else {
                 continue;
             };
@@ -360,8 +414,16 @@ pub fn fly(
             if (k + 1) % 1000 == 0 {
                 for s in &truths {
                     let ch = channels.get(&s.view.prn);
-                    let delivering = ch.is_some_and(|c| c.delivering());
-                    let reported = ch.map_or(0.0, |c| c.reported_cn0_dbhz());
+                    let (delivering, reported) = match &sample_level {
+                        Some(sl) if in_samples => {
+                            let r = sl.reported_cn0_dbhz(s.view.prn);
+                            (r.is_some(), r.unwrap_or(0.0))
+                        }
+                        _ => (
+                            ch.is_some_and(|c| c.delivering()),
+                            ch.map_or(0.0, |c| c.reported_cn0_dbhz()),
+                        ),
+                    };
                     if s.elevation[0] > 0.0 {
                         record.sky.push(SkyPoint {
                             t: tc,
@@ -379,7 +441,10 @@ pub fn fly(
             }
         }
     }
-    record.wall_s.1 = started.elapsed().as_secs_f64();
+    record.wall_s.1 = started.elapsed().as_secs_f64() - record.wall_s.0;
+    if let Some(sl) = sample_level {
+        record.sample_stats = Some(sl.stats().clone());
+    }
     record.calibration = receiver.gyro_calibration();
     let b = gyro.current_errors();
     let est = receiver.gyro_bias();
