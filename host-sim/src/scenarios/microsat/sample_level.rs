@@ -102,11 +102,15 @@ pub struct SampleLevel {
     stats: SampleStats,
 }
 
+/// One satellite at one track point: PRN, range (m), range rate (m/s), `μ·r_P` (m) and C/N0
+/// (dB-Hz, `NEG_INFINITY` where not received) per antenna.
+type TrackPoint = (u8, f64, f64, [f64; 3], [f64; 3]);
+
 /// The satellite tracks of `world` over `[0, duration_s]`: every healthy satellite some
 /// antenna receives at some point.
 fn tracks(world: &World, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
     let n = (duration_s / TRACK_STEP_S).ceil() as usize + 2;
-    let points: Vec<Vec<(u8, f64, f64, [f64; 3], [f64; 3])>> = (0..n)
+    let points: Vec<Vec<TrackPoint>> = (0..n)
         .into_par_iter()
         .map(|k| {
             let t = k as f64 * TRACK_STEP_S;
