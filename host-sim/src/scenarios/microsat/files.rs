@@ -188,15 +188,28 @@ fn plot_error(
                 .filter(|p| p.1.is_finite())
                 .collect()
         };
+        let mut series = vec![
+            Series::line("receiver − truth", pts(&|s| s.error[a].to_degrees()), 0),
+            Series::bound("±3σ (receiver)", pts(&|s| 3.0 * s.sigma[a].to_degrees()), 1),
+            Series::bound("", pts(&|s| -3.0 * s.sigma[a].to_degrees()), 1),
+            Series::bound("±3× bound", pts(&|s| 3.0 * s.bound[a].to_degrees()), 2),
+            Series::bound("", pts(&|s| -3.0 * s.bound[a].to_degrees()), 2),
+        ];
+        if record.sample_level_s > 0.0 {
+            let lim = series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.1.abs()))
+                .fold(0.0, f64::max);
+            let t = record.sample_level_s;
+            series.push(Series::line(
+                format!("end of the sample-level chain ({t:.0} s), then I/Q fast path"),
+                vec![(t, -lim), (t, lim)],
+                5,
+            ));
+        }
         panels.push(Panel {
             y_label: format!("error about {name}, deg"),
-            series: vec![
-                Series::line("receiver − truth", pts(&|s| s.error[a].to_degrees()), 0),
-                Series::bound("±3σ (receiver)", pts(&|s| 3.0 * s.sigma[a].to_degrees()), 1),
-                Series::bound("", pts(&|s| -3.0 * s.sigma[a].to_degrees()), 1),
-                Series::bound("±3× bound", pts(&|s| 3.0 * s.bound[a].to_degrees()), 2),
-                Series::bound("", pts(&|s| -3.0 * s.bound[a].to_degrees()), 2),
-            ],
+            series,
         });
     }
     plot_panels(
