@@ -540,3 +540,42 @@ mod one_stage {
         }
     }
 }
+
+mod receiver {
+    use defmt::{write, Format, Formatter};
+
+    use crate::receiver::{AttitudeReceiver, ReceiverAttitude, StageEstimate};
+
+    impl Format for StageEstimate {
+        fn format(&self, f: Formatter<'_>) {
+            write!(
+                f,
+                "StageEstimate {{ epoch: {=u64}, q_rb: {}, covariance (column-major): {=[?]} }}",
+                self.epoch,
+                self.q_rb,
+                self.covariance.as_slice()
+            );
+        }
+    }
+
+    impl Format for ReceiverAttitude {
+        fn format(&self, f: Formatter<'_>) {
+            write!(
+                f,
+                "ReceiverAttitude {{ epoch: {=u64}, source: {}, q_rb: {}, euler: {}, covariance (column-major): {=[?]}, health: {} }}",
+                self.epoch,
+                self.source,
+                self.q_rb,
+                self.euler,
+                self.covariance.as_slice(),
+                self.health
+            );
+        }
+    }
+
+    impl Format for AttitudeReceiver {
+        fn format(&self, f: Formatter<'_>) {
+            write!(f, "AttitudeReceiver {{ {} }}", self.attitude());
+        }
+    }
+}

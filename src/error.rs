@@ -709,6 +709,68 @@ impl<E: fmt::Debug> fmt::Display for FrontEndError<E> {
 
 impl<E: fmt::Debug> core::error::Error for FrontEndError<E> {}
 
+/// Errors of the attitude receiver ([`crate::receiver`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ReceiverError {
+    /// An input (observation, line of sight, gyro increment, configuration value) was NaN or
+    /// infinite.
+    NonFinite,
+    /// A configuration value is outside its domain (a non-positive epoch, window or noise
+    /// level, a degenerate antenna array, a window that is not a whole number of gyro steps);
+    /// the error of the stage that refused it is logged.
+    InvalidConfig,
+    /// An input is finite but unusable: a line of sight that is not a unit vector, a noise
+    /// variance that is not positive, a C/N0 outside 0..=90 dB-Hz, a gyro increment above one
+    /// radian.
+    InvalidInput,
+    /// An observation arrived for a satellite without navigation aiding (no line of sight):
+    /// call [`crate::receiver::AttitudeReceiver::set_aiding`] first.
+    NoAiding,
+    /// More satellites than the receiver has slots for.
+    TooManySatellites,
+    /// An observation arrived for an epoch the receiver has already closed.
+    StaleEpoch,
+    /// A software tracking channel refused a hand-over or a sample block.
+    Tracking(TrackingError),
+}
+
+impl From<TrackingError> for ReceiverError {
+    fn from(e: TrackingError) -> Self {
+        Self::Tracking(e)
+    }
+}
+
+impl Error for ReceiverError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::InvalidConfig
+            | Self::InvalidInput
+            | Self::NoAiding
+            | Self::TooManySatellites
+            | Self::StaleEpoch => ErrorKind::InvalidInput,
+            Self::Tracking(e) => e.kind(),
+        }
+    }
+}
+
+impl fmt::Display for ReceiverError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NonFinite => f.write_str("non-finite receiver input"),
+            Self::InvalidConfig => f.write_str("invalid receiver configuration"),
+            Self::InvalidInput => f.write_str("receiver input out of range"),
+            Self::NoAiding => f.write_str("no line of sight for this satellite"),
+            Self::TooManySatellites => f.write_str("no free satellite slot"),
+            Self::StaleEpoch => f.write_str("observation for an epoch already closed"),
+            Self::Tracking(e) => write!(f, "tracking channel: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for ReceiverError {}
 /// Errors of the antenna array ([`crate::attitude::array::AntennaArray`]), shared by the
 /// paper-000 filters and the one-stage filter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -80,6 +80,7 @@ pub mod frontend;
 pub mod geometry;
 pub mod gyro;
 pub mod noise;
+pub mod receiver;
 pub mod selftest;
 pub mod signal;
 pub mod tracking;
@@ -89,8 +90,8 @@ mod defmt_impls;
 
 pub use error::{
     AcquisitionError, AmbiguityError, ArrayError, CalibrationError, DcmError, ErrorKind,
-    FilterError, FrontEndError, GeometryError, OneStageError, SampleError, SignalError,
-    SnapshotError, TrackingError,
+    FilterError, FrontEndError, GeometryError, OneStageError, ReceiverError, SampleError,
+    SignalError, SnapshotError, TrackingError,
 };
 
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the

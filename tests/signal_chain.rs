@@ -485,6 +485,7 @@ fn scene(cn0: f64, prns: &[u8], seed: u64, fs: f64, complex: bool) -> Scene {
                 carrier_phase_cycles: rng.random_range(0.0..1.0),
                 los_ref: Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin()),
                 data_seed: Some(seed + k as u64),
+                track: None,
             }
         })
         .collect();

@@ -116,6 +116,7 @@ pub fn run_all() {
     dcm_budgets();
     gyro_budgets();
     one_stage_budgets();
+    receiver_budgets();
 }
 
 fn ekf_budgets() {
@@ -548,4 +549,61 @@ fn signal_budgets() {
             black_box(&mut acq).search(prn, black_box(&s[0][..]), Some(black_box(&s[3][..])), 0, &cfg).is_ok()
         });
     }
+}
+
+/// The receiver on the example flight (8 satellites at 45 dB-Hz, 0.5 m triangle, gyro at 100 Hz):
+/// the cold start's window, a plain epoch, a window epoch, a window epoch with the snapshot,
+/// one gyro sample.
+fn receiver_budgets() {
+    use gnss_attitude::receiver::example::ExampleFlight;
+    use gnss_attitude::receiver::AttitudeReceiver;
+    let mut flight = ExampleFlight::new(7);
+    let Ok(mut r) = AttitudeReceiver::new(ExampleFlight::config(true)) else { return };
+    hprintln!("receiver: {} B", core::mem::size_of::<AttitudeReceiver>());
+    // one epoch: the observations of 8 satellites pushed, the epoch closed
+    let epoch = |r: &mut AttitudeReceiver, flight: &mut ExampleFlight, k: u64, name: &str| {
+        if k % 100 == 0 {
+            let _ = r.set_aiding(&flight.aiding(k));
+        }
+        if k > 0 && k % 10 == 0 {
+            let _ = r.push_gyro_increment(&flight.gyro_increment(k / 10 - 1));
+        }
+        let obs = flight.observations(k);
+        if name.is_empty() {
+            for o in obs.iter() {
+                let _ = r.push_observation(k, o);
+            }
+            r.close_through(k);
+        } else {
+            let _ = measure(name, || {
+                let r = black_box(&mut *r);
+                for o in black_box(&obs).iter() {
+                    let _ = r.push_observation(k, o);
+                }
+                r.close_through(black_box(k));
+            });
+        }
+    };
+    for k in 0..99 {
+        epoch(&mut r, &mut flight, k, "");
+    }
+    epoch(&mut r, &mut flight, 99, "receiver epoch closing the cold-start window (8 sats: SDs, ambiguity resolution, fine start)");
+    for k in 100..550 {
+        epoch(&mut r, &mut flight, k, "");
+    }
+    epoch(&mut r, &mut flight, 550, "receiver epoch, 8 sats in (SDs, bit and antenna monitors, fine step N = 6)");
+    for k in 551..599 {
+        epoch(&mut r, &mut flight, k, "");
+    }
+    epoch(&mut r, &mut flight, 599, "receiver epoch closing a window (8 sats: ambiguity upkeep, LS baselines + velocities, rigid-body step)");
+    for k in 600..999 {
+        epoch(&mut r, &mut flight, k, "");
+    }
+    epoch(&mut r, &mut flight, 999, "receiver epoch closing a window with the snapshot monitor (8 sats)");
+    let theta = flight.gyro_increment(100);
+    let _ = measure("receiver gyro sample (propagation, calibrator increment)", || {
+        black_box(&mut r).push_gyro_increment(black_box(&theta)).is_ok()
+    });
+    let att = r.attitude();
+    hprintln!("receiver: source {:?}, error {} deg", att.source, att.q_rb.angle_to(&flight.attitude(att.epoch)) * 57.29578);
 }

@@ -73,6 +73,7 @@ fn main() -> ! {
     gyro();
     one_stage();
     signal_chain();
+    receiver();
     loop {
         cortex_m::asm::nop();
     }
@@ -413,6 +414,48 @@ fn signal_chain() {
     let _ = black_box(fe.configure(&black_box(Nt1065Config::three_antenna_l1())));
     let _ = black_box(fe.wait_ready(&mut NoDelay, black_box(10)));
     let _ = black_box(fe.read_register(black_box(44)));
+}
+
+/// The attitude receiver's entry points with opaque inputs.
+#[inline(never)]
+fn receiver() {
+    use gnss_attitude::attitude::one_stage::{PromptIq, SatelliteObservation};
+    use gnss_attitude::receiver::{AttitudeReceiver, GyroConfig, ReceiverConfig, SatelliteAiding};
+    let antennas: [[f32; 3]; 3] = black_box([[0.29, 0.0, -0.05], [-0.14, 0.25, -0.05], [-0.14, -0.25, -0.05]]);
+    let mut config = ReceiverConfig::gps_l1(antennas, Some(GyroConfig::mems(black_box(0.01), black_box(Some(1e-5)))));
+    config.window_epochs = black_box(100);
+    let Ok(mut r) = AttitudeReceiver::new(config) else { return };
+    let aiding: [SatelliteAiding; 12] = core::array::from_fn(|i| SatelliteAiding {
+        prn: black_box(i as u8 + 1),
+        epoch: black_box(0),
+        los: black_box([0.0, 0.6, -0.8]),
+        los_rate: black_box([1e-4, 0.0, 0.0]),
+    });
+    let _ = black_box(r.set_aiding(black_box(&aiding)));
+    for k in 0..black_box(3u64) {
+        let _ = black_box(r.push_gyro_increment(&black_box([1e-4, 2e-4, -1e-4])));
+        let _ = black_box(r.push_gyro_pulses(black_box([3, -2, 10])));
+        for i in 0..black_box(12u8) {
+            let obs = SatelliteObservation {
+                id: black_box(i + 1),
+                los: black_box([0.0, 0.0, 1.0]),
+                prompt: PromptIq { i: black_box([30.0, 20.0, -10.0]), q: black_box([1.0, 15.0, 8.0]) },
+                noise_var: black_box(1.0),
+                cn0_dbhz: black_box(45.0),
+            };
+            let _ = black_box(r.push_observation(black_box(k), &obs));
+        }
+        r.close_through(black_box(k));
+    }
+    let _ = black_box(r.attitude());
+    let _ = black_box(r.fine_estimate());
+    let _ = black_box(r.snapshot_estimate());
+    let _ = black_box(r.rigid_body_estimate());
+    let _ = black_box(r.gyro_calibration());
+    let _ = black_box(r.health());
+    while let Some(e) = r.pop_event() {
+        let _ = black_box(e);
+    }
 }
 
 #[panic_handler]

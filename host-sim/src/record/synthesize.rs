@@ -187,6 +187,7 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
             carrier_phase_cycles: rng.random_range(0.0..1.0),
             los_ref: Vector3::new(e.cos() * a.cos(), e.cos() * a.sin(), -e.sin()),
             data_seed: Some(spec.seed.wrapping_mul(977).wrapping_add(k as u64)),
+            track: None,
         });
     }
     let complex = spec.format.is_complex();

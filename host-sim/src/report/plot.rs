@@ -149,10 +149,13 @@ fn draw_panel<DB: DrawingBackend>(
             color.stroke_width(2)
         };
         let legend_style = style;
-        chart
-            .draw_series(LineSeries::new(s.points.iter().copied(), style))?
-            .label(s.name.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], legend_style));
+        let drawn = chart.draw_series(LineSeries::new(s.points.iter().copied(), style))?;
+        // an unnamed series (the second half of a ± pair) gets no legend entry
+        if !s.name.is_empty() {
+            drawn
+                .label(s.name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], legend_style));
+        }
     }
     chart
         .configure_series_labels()

@@ -15,6 +15,7 @@ use serde_json::{json, Map, Value};
 pub mod dcm;
 pub mod gyro_cal;
 pub mod gyro_cal_gnss;
+pub mod microsat;
 pub mod one_stage;
 pub mod signal;
 pub mod snapshot;
@@ -28,10 +29,11 @@ pub const SCENARIOS: &[Scenario] = &[
     gyro_cal::SCENARIO,
     signal::SCENARIO,
     one_stage::SCENARIO,
+    microsat::SCENARIO,
 ];
 
 /// What `host-sim` runs when called without arguments.
-pub const DEFAULT_SCENARIO: &str = "vector-ekf";
+pub const DEFAULT_SCENARIO: &str = "microsat";
 
 /// One experiment.
 pub struct Scenario {

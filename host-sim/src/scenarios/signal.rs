@@ -91,6 +91,7 @@ pub fn scene(cn0_dbhz: f64, seed: u64) -> Scene {
                 // Local frame: x north, y east, z up.
                 los_ref: Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin()),
                 data_seed: Some(seed.wrapping_mul(31).wrapping_add(k as u64)),
+                track: None,
             }
         })
         .collect();

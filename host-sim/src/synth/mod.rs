@@ -13,4 +13,6 @@ pub mod file;
 pub mod quantize;
 pub mod scene;
 
-pub use scene::{AnalogSamples, AttitudeMotion, FrontEnd, Satellite, Scene, SignalTruth};
+pub use scene::{
+    AnalogSamples, AttitudeMotion, FrontEnd, Satellite, SatelliteTrack, Scene, SignalTruth,
+};

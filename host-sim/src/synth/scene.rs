@@ -13,11 +13,20 @@
 //! (edges at every 20th code epoch) and `A = √(2 (C/N0) / f_s)`, so that a 1 ms coherent sum
 //! has `SNR = (C/N0)·T`. `(μ·r_P)/λ` is paper 003's `ψ_P/2π`, eq. (4)/(24).
 //!
+//! A satellite with a [`SatelliteTrack`] (a LEO receiver: the line of sight, the range and the
+//! body all move) takes its range, geometric term `μ·r_P(t)` and per-antenna C/N0 from the
+//! track instead: `f_D t + ½ ḟ_D t²` becomes `−(ρ(t) − ρ(0))/λ` (cubic Hermite between the
+//! track's range and range-rate points, so the Doppler is continuous), `μ·r_P(t)` is
+//! interpolated linearly (its curvature over a 10 ms step is below a micrometre) and the
+//! amplitude follows the antenna's C/N0 (zero where the antenna does not receive).
+//!
 //! Within a sub-block of [`SUB_BLOCK`] samples the code rate, carrier frequency and geometric
 //! phase are those at the sub-block's middle and its start phases are exact (closed form), so
 //! the phase error is below `ḟ_D (B/f_s)²/8` (10⁻⁵ cycle at 100 Hz/s). The noise of each
 //! sub-block and antenna has its own seed: the output does not depend on how a run is cut
 //! into calls, nor on the number of threads.
+
+use std::sync::Arc;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use rand::SeedableRng;
@@ -57,6 +66,106 @@ pub struct Satellite {
     pub los_ref: Vector3<f64>,
     /// Seed of the navigation data bits; `None`: no data modulation.
     pub data_seed: Option<u64>,
+    /// Tabulated motion (range, geometry, C/N0 per antenna); `None`: the constant line of
+    /// sight, polynomial Doppler and constant C/N0 above.
+    pub track: Option<Arc<SatelliteTrack>>,
+}
+
+/// A satellite's range, per-antenna geometry and per-antenna C/N0 tabulated from `t = 0` at a
+/// uniform step (the truth of a moving receiver and body, computed once by the scenario).
+#[derive(Clone, Debug, Default)]
+pub struct SatelliteTrack {
+    /// Table step, s.
+    pub step_s: f64,
+    /// Range from the array origin to the satellite at `t = k·step`, m.
+    pub range_m: Vec<f64>,
+    /// Range rate at `t = k·step`, m/s.
+    pub range_rate_m_s: Vec<f64>,
+    /// `μ·r_P` per point and antenna (`[k][P]`), m: antenna P's phase-centre offset projected
+    /// on the line of sight (paper 003's `ψ_P λ/2π`).
+    pub geometry_m: Vec<Vec<f64>>,
+    /// C/N0 per point and antenna (`[k][P]`), dB-Hz; `f64::NEG_INFINITY` where the antenna
+    /// does not receive the satellite (below its mask, blocked).
+    pub cn0_dbhz: Vec<Vec<f64>>,
+}
+
+impl SatelliteTrack {
+    /// Index and fraction of `t` in the table (clamped to its ends).
+    fn locate(&self, t: f64) -> (usize, f64) {
+        let last = self.range_m.len().saturating_sub(2);
+        let x = (t / self.step_s).max(0.0);
+        let k = (x.floor() as usize).min(last);
+        (k, (x - k as f64).min(1.0))
+    }
+
+    /// Range at `t`, m (cubic Hermite on range and range rate).
+    pub fn range(&self, t: f64) -> f64 {
+        if self.range_m.len() < 2 {
+            return self.range_m.first().copied().unwrap_or(0.0);
+        }
+        let (k, u) = self.locate(t);
+        let h = self.step_s;
+        let (p0, p1) = (self.range_m[k], self.range_m[k + 1]);
+        let (m0, m1) = (self.range_rate_m_s[k] * h, self.range_rate_m_s[k + 1] * h);
+        let (u2, u3) = (u * u, u * u * u);
+        (2.0 * u3 - 3.0 * u2 + 1.0) * p0
+            + (u3 - 2.0 * u2 + u) * m0
+            + (-2.0 * u3 + 3.0 * u2) * p1
+            + (u3 - u2) * m1
+    }
+
+    /// Range rate at `t`, m/s (the derivative of [`SatelliteTrack::range`]).
+    pub fn range_rate(&self, t: f64) -> f64 {
+        if self.range_m.len() < 2 {
+            return self.range_rate_m_s.first().copied().unwrap_or(0.0);
+        }
+        let (k, u) = self.locate(t);
+        let h = self.step_s;
+        let (p0, p1) = (self.range_m[k], self.range_m[k + 1]);
+        let (m0, m1) = (self.range_rate_m_s[k] * h, self.range_rate_m_s[k + 1] * h);
+        let u2 = u * u;
+        ((6.0 * u2 - 6.0 * u) * p0
+            + (3.0 * u2 - 4.0 * u + 1.0) * m0
+            + (-6.0 * u2 + 6.0 * u) * p1
+            + (3.0 * u2 - 2.0 * u) * m1)
+            / h
+    }
+
+    fn linear(&self, table: &[Vec<f64>], antenna: usize, t: f64) -> f64 {
+        let at = |k: usize| table.get(k).and_then(|r| r.get(antenna)).copied();
+        if table.len() < 2 {
+            return at(0).unwrap_or(0.0);
+        }
+        let (k, u) = self.locate(t);
+        let (a, b) = (at(k).unwrap_or(0.0), at(k + 1).unwrap_or(0.0));
+        a + (b - a) * u
+    }
+
+    /// `μ·r_P` of antenna `antenna` at `t`, m.
+    pub fn geometry(&self, antenna: usize, t: f64) -> f64 {
+        self.linear(&self.geometry_m, antenna, t)
+    }
+
+    /// C/N0 of antenna `antenna` at `t`, dB-Hz (`NEG_INFINITY` when either neighbouring point
+    /// is not received: the signal switches off and on at table points).
+    pub fn cn0(&self, antenna: usize, t: f64) -> f64 {
+        let (k, u) = self.locate(t);
+        let at = |k: usize| {
+            self.cn0_dbhz
+                .get(k)
+                .and_then(|r| r.get(antenna))
+                .copied()
+                .unwrap_or(f64::NEG_INFINITY)
+        };
+        let (a, b) = (at(k), at(k + 1));
+        if a.is_finite() && b.is_finite() {
+            a + (b - a) * u
+        } else if u < 0.5 {
+            a
+        } else {
+            b
+        }
+    }
 }
 
 /// Attitude of the body (`C_rb`) over time.
@@ -143,10 +252,19 @@ impl Scene {
     /// The truth of satellite `sat` at antenna `antenna` at time `t` (s).
     pub fn truth(&self, sat: usize, antenna: usize, t: f64) -> SignalTruth {
         let s = &self.satellites[sat];
-        let geo_m = s
-            .los_ref
-            .dot(&(self.attitude.c_rb(t) * self.antennas_b[antenna]));
-        let dopp_cycles = s.doppler_hz * t + 0.5 * s.doppler_rate_hz_s * t * t;
+        let (geo_m, dopp_cycles, doppler_hz) = match &s.track {
+            Some(track) => (
+                track.geometry(antenna, t),
+                -(track.range(t) - track.range(0.0)) / L1_WAVELENGTH,
+                -track.range_rate(t) / L1_WAVELENGTH,
+            ),
+            None => (
+                s.los_ref
+                    .dot(&(self.attitude.c_rb(t) * self.antennas_b[antenna])),
+                s.doppler_hz * t + 0.5 * s.doppler_rate_hz_s * t * t,
+                s.doppler_hz + s.doppler_rate_hz_s * t,
+            ),
+        };
         let code = s.code_phase_chips
             + CHIP_RATE * t
             + CHIP_RATE / L1_HZ * dopp_cycles
@@ -158,7 +276,7 @@ impl Scene {
                 + dopp_cycles
                 + geo_m / L1_WAVELENGTH
                 + self.line_bias_cycles.get(antenna).copied().unwrap_or(0.0),
-            doppler_hz: s.doppler_hz + s.doppler_rate_hz_s * t,
+            doppler_hz,
         }
     }
 
@@ -166,6 +284,22 @@ impl Scene {
     pub fn amplitude(&self, sat: usize) -> f64 {
         (2.0 * 10f64.powf(self.satellites[sat].cn0_dbhz / 10.0) / self.front_end.sample_rate_hz)
             .sqrt()
+    }
+
+    /// Signal amplitude of a satellite at an antenna at `t` (the track's C/N0 when it has
+    /// one; zero where that antenna does not receive it).
+    pub fn amplitude_at(&self, sat: usize, antenna: usize, t: f64) -> f64 {
+        match &self.satellites[sat].track {
+            Some(track) => {
+                let cn0 = track.cn0(antenna, t);
+                if cn0.is_finite() {
+                    (2.0 * 10f64.powf(cn0 / 10.0) / self.front_end.sample_rate_hz).sqrt()
+                } else {
+                    0.0
+                }
+            }
+            None => self.amplitude(sat),
+        }
     }
 
     /// Samples `[first, first + n)` of every antenna (`first` a multiple of [`SUB_BLOCK`] keeps
@@ -211,12 +345,15 @@ impl Scene {
         let dt = 1.0 / fs;
         let mut values = vec![0.0f64; n];
         for (si, s) in self.satellites.iter().enumerate() {
-            let amp = self.amplitude(si)
+            let amp = self.amplitude_at(si, antenna, t_mid)
                 * if fe.complex {
                     1.0
                 } else {
                     std::f64::consts::SQRT_2
                 };
+            if amp == 0.0 {
+                continue;
+            }
             let tr0 = self.truth(si, antenna, t0);
             let tr_mid = self.truth(si, antenna, t_mid);
             // Rates over the sub-block from the exact phases at its start and middle.
@@ -311,4 +448,46 @@ pub fn mix(a: u64, b: u64, c: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A track sampled from a known LEO-like range history reproduces it between its points,
+    /// and its range rate is the derivative of its range (finite differences).
+    #[test]
+    fn a_satellite_track_interpolates_range_and_its_rate_consistently() {
+        // range = ρ0 + v t + ½ a t² + j t³/6 (a LEO-GPS pair: 3 km/s, 11 m/s², 0.05 m/s³)
+        let r = |t: f64| 2.2e7 + 3000.0 * t + 5.5 * t * t + 0.05 / 6.0 * t * t * t;
+        let v = |t: f64| 3000.0 + 11.0 * t + 0.025 * t * t;
+        let step = 0.01;
+        let n = 201;
+        let track = SatelliteTrack {
+            step_s: step,
+            range_m: (0..n).map(|k| r(k as f64 * step)).collect(),
+            range_rate_m_s: (0..n).map(|k| v(k as f64 * step)).collect(),
+            geometry_m: (0..n).map(|k| vec![0.1 * k as f64, -0.2]).collect(),
+            cn0_dbhz: (0..n)
+                .map(|k| vec![45.0, if k < 100 { 40.0 } else { f64::NEG_INFINITY }])
+                .collect(),
+        };
+        for &t in &[0.0021, 0.0037, 0.5, 0.7351, 1.9949] {
+            assert!((track.range(t) - r(t)).abs() < 1e-6, "range at {t}");
+            let h = 1e-3;
+            let fd = (track.range(t + h) - track.range(t - h)) / (2.0 * h);
+            assert!((track.range_rate(t) - fd).abs() < 1e-3, "rate at {t}");
+            assert!(
+                (track.range_rate(t) - v(t)).abs() < 1e-6,
+                "rate truth at {t}"
+            );
+        }
+        assert!((track.geometry(0, 0.015) - 0.15).abs() < 1e-12);
+        assert!((track.geometry(1, 1.0) + 0.2).abs() < 1e-12);
+        assert_eq!(track.cn0(0, 0.5), 45.0);
+        assert_eq!(track.cn0(1, 0.5), 40.0);
+        assert_eq!(track.cn0(1, 1.5), f64::NEG_INFINITY);
+        // clamped past the end
+        assert!(track.range(5.0).is_finite());
+    }
 }

@@ -18,4 +18,5 @@ pub mod gps;
 pub mod gyro;
 pub mod kinematics;
 pub mod orbit;
+pub mod sky;
 pub mod tumble;

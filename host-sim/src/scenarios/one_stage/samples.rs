@@ -61,6 +61,7 @@ pub fn chain_params(cfg: &RunConfig, seed: u64) -> ChainParams {
             carrier_phase_cycles: rng.random_range(0.0..1.0),
             los_ref: s.los(),
             data_seed: Some(seed.wrapping_mul(31).wrapping_add(k as u64)),
+            track: None,
         })
         .collect();
     let attitude = match cfg.motion {

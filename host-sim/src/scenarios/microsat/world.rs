@@ -1,0 +1,234 @@
+//! The microsatellite's world (f64 truth): a 550 km sun-synchronous orbit, the GPS
+//! constellation of the bundled almanac, the attitude history, the three-antenna array on the
+//! zenith face, each antenna's view of the sky, the C/N0 and the faults that act on the signal.
+
+use gnss_attitude::geometry::Quaternion;
+use nalgebra::{Matrix3, Vector3};
+
+use crate::truth::attitude::{AttitudeTruth, DetumblingBody, NadirTumble};
+use crate::truth::gps::Almanac;
+use crate::truth::orbit::Orbit;
+use crate::truth::sky::{GpsView, SkyModel, L1_WAVELENGTH_M};
+
+/// Side of the antenna triangle, m.
+pub const TRIANGLE_SIDE_M: f64 = 0.5;
+/// Elevation mask above each antenna's horizon, rad.
+pub const MASK_RAD: f64 = 10.0 * std::f64::consts::PI / 180.0;
+/// Altitude of the orbit, m.
+pub const ALTITUDE_M: f64 = 550e3;
+
+/// The attitude history of the run.
+pub enum Motion {
+    /// Nadir pointing with a slow spin about the boresight and a wobble (the default).
+    Nadir(NadirTumble),
+    /// A body after separation, its rates damped by a magnetorquer-like torque.
+    Detumbling(DetumblingBody),
+}
+
+impl AttitudeTruth for Motion {
+    fn q_ib(&self, t: f64) -> Quaternion<f64> {
+        match self {
+            Self::Nadir(m) => m.q_ib(t),
+            Self::Detumbling(m) => m.q_ib(t),
+        }
+    }
+
+    fn omega_b(&self, t: f64) -> Vector3<f64> {
+        match self {
+            Self::Nadir(m) => m.omega_b(t),
+            Self::Detumbling(m) => m.omega_b(t),
+        }
+    }
+}
+
+/// An antenna: phase centre and boresight in body axes.
+#[derive(Clone, Copy, Debug)]
+pub struct Antenna {
+    /// Phase centre, body axes, m.
+    pub position: Vector3<f64>,
+    /// Boresight (unit), body axes.
+    pub boresight: Vector3<f64>,
+}
+
+/// One satellite as the truth sees it at one instant.
+#[derive(Clone, Copy, Debug)]
+pub struct SatTruth {
+    /// The geometry (ECI).
+    pub view: GpsView,
+    /// Elevation above each antenna's horizon, rad.
+    pub elevation: [f64; 3],
+    /// Azimuth in the antenna plane of antenna A (from body +x towards +y), rad.
+    pub azimuth: f64,
+    /// Whether each antenna receives the satellite (above its mask, not occulted, not blocked).
+    pub visible: [bool; 3],
+    /// C/N0 at each antenna (of the satellite, before blockage), dB-Hz.
+    pub cn0_dbhz: [f64; 3],
+}
+
+/// A time interval during which one antenna receives nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct Blockage {
+    /// Antenna (0 = A, 1 = B, 2 = C).
+    pub antenna: usize,
+    /// Start, s.
+    pub start: f64,
+    /// End, s.
+    pub end: f64,
+}
+
+/// The world.
+pub struct World {
+    /// Orbit and constellation.
+    pub sky: SkyModel,
+    /// Attitude history.
+    pub motion: Motion,
+    /// The antennas A, B, C.
+    pub antennas: [Antenna; 3],
+    /// Line biases of A, B, C (carrier phase added by each RF chain), rad.
+    pub line_bias_rad: [f64; 3],
+    /// Blockages.
+    pub blockages: Vec<Blockage>,
+}
+
+/// The equilateral triangle of side [`TRIANGLE_SIDE_M`] on the zenith face (`z = −0.05 m`,
+/// boresight body −z: the body's +z points to nadir), centred on the body z axis.
+pub fn zenith_triangle() -> [Antenna; 3] {
+    let r = TRIANGLE_SIDE_M / 3f64.sqrt();
+    let at = |angle_deg: f64| {
+        let a = angle_deg.to_radians();
+        Antenna {
+            position: Vector3::new(r * a.cos(), r * a.sin(), -0.05),
+            boresight: -Vector3::z(),
+        }
+    };
+    [at(0.0), at(120.0), at(240.0)]
+}
+
+/// C/N0 of a satellite at elevation `el` above an antenna's horizon: 38 + 9 sin(el) dB-Hz
+/// (a patch antenna: 47 dB-Hz at the boresight, 39.6 dB-Hz at the 10° mask).
+pub fn cn0_model(el: f64) -> f64 {
+    38.0 + 9.0 * el.max(0.0).sin()
+}
+
+impl World {
+    /// The default world: sun-synchronous orbit (RAAN 0.3 rad, argument of latitude `u0`),
+    /// the bundled almanac, GPS time at `t = 0` = the almanac's time of applicability plus
+    /// `gps_offset_s`.
+    pub fn new(motion_kind: MotionKind, u0: f64, gps_offset_s: f64, seed_rates: [f64; 3]) -> Self {
+        let almanac = Almanac::bundled();
+        let orbit = Orbit::sun_synchronous(ALTITUDE_M, 0.3, u0);
+        let motion = match motion_kind {
+            MotionKind::Nadir => Motion::Nadir(NadirTumble {
+                orbit,
+                spin_rate: 0.6f64.to_radians(),
+                wobble: 4f64.to_radians(),
+                wobble_period: 150.0,
+            }),
+            MotionKind::Detumbling { duration_s } => {
+                let inertia = Matrix3::from_diagonal(&Vector3::new(0.9, 1.1, 0.7));
+                let q0 = Quaternion::from_rotation_vector(&Vector3::new(0.3, -2.6, 0.4));
+                let w0 = Vector3::from(seed_rates);
+                Motion::Detumbling(DetumblingBody::simulate(
+                    inertia,
+                    4e-4,
+                    q0,
+                    w0,
+                    duration_s + 5.0,
+                    0.01,
+                ))
+            }
+        };
+        Self {
+            sky: SkyModel {
+                orbit,
+                gps_time_of_week_s: almanac.reference_time_s() + gps_offset_s,
+                almanac,
+            },
+            motion,
+            antennas: zenith_triangle(),
+            line_bias_rad: [0.0, 0.7, -1.2],
+            blockages: Vec::new(),
+        }
+    }
+
+    /// `C_ib(t)`: body to ECI.
+    pub fn c_ib(&self, t: f64) -> Matrix3<f64> {
+        self.motion.q_ib(t).to_dcm()
+    }
+
+    /// Whether antenna `a` is blocked at `t`.
+    pub fn blocked(&self, a: usize, t: f64) -> bool {
+        self.blockages
+            .iter()
+            .any(|b| b.antenna == a && t >= b.start && t < b.end)
+    }
+
+    /// The antenna-frame view of a satellite with line of sight `los` (ECI) under `c_ib`.
+    pub fn antenna_view(&self, view: &GpsView, c_ib: &Matrix3<f64>, t: f64) -> SatTruth {
+        let s_b = c_ib.transpose() * view.los;
+        let mut elevation = [0.0; 3];
+        let mut visible = [false; 3];
+        let mut cn0 = [0.0; 3];
+        for (i, a) in self.antennas.iter().enumerate() {
+            let el = s_b.dot(&a.boresight).clamp(-1.0, 1.0).asin();
+            elevation[i] = el;
+            visible[i] = el >= MASK_RAD && !view.occulted && !self.blocked(i, t);
+            cn0[i] = cn0_model(el);
+        }
+        // azimuth in antenna A's plane: x_b, y_b (boresight −z)
+        let azimuth = s_b.y.atan2(s_b.x).rem_euclid(std::f64::consts::TAU);
+        SatTruth {
+            view: *view,
+            elevation,
+            azimuth,
+            visible,
+            cn0_dbhz: cn0,
+        }
+    }
+
+    /// Every healthy satellite above the Earth's limb at `t`, with its antenna-frame view.
+    pub fn satellites(&self, t: f64) -> Vec<SatTruth> {
+        let c = self.c_ib(t);
+        self.sky
+            .views(t)
+            .iter()
+            .filter(|v| !v.occulted)
+            .map(|v| self.antenna_view(v, &c, t))
+            .collect()
+    }
+
+    /// The carrier phase of antenna `a` relative to the array origin for line of sight `los`
+    /// (ECI) under `c_ib`: `ψ = 2π μᵀ C_ib r_a / λ` (paper 003, eq. (4)), rad.
+    pub fn geometric_phase(&self, a: usize, los: &Vector3<f64>, c_ib: &Matrix3<f64>) -> f64 {
+        std::f64::consts::TAU * los.dot(&(c_ib * self.antennas[a].position)) / L1_WAVELENGTH_M
+    }
+}
+
+/// Which attitude history.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MotionKind {
+    /// Nadir pointing, slow spin and wobble.
+    Nadir,
+    /// Detumbling body over `duration_s`.
+    Detumbling {
+        /// Length of the simulated history, s.
+        duration_s: f64,
+    },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_zenith_antennas_see_a_leo_sky_with_enough_satellites() {
+        let w = World::new(MotionKind::Nadir, 0.0, 0.0, [0.0; 3]);
+        for t in [0.0, 200.0, 400.0, 600.0] {
+            let n = w.satellites(t).iter().filter(|s| s.visible[0]).count();
+            assert!((6..=14).contains(&n), "t {t}: {n} visible");
+        }
+        let a = zenith_triangle();
+        assert!(((a[0].position - a[1].position).norm() - TRIANGLE_SIDE_M).abs() < 1e-12);
+        assert!(((a[1].position - a[2].position).norm() - TRIANGLE_SIDE_M).abs() < 1e-12);
+    }
+}

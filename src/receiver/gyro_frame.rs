@@ -1,0 +1,268 @@
+//! The gyro inside the receiver: propagation of the computed attitude `M(t)` (paper 001, eq.
+//! (1.1), two-sample coning update), extrapolated between propagation steps with the last
+//! step's rate, and the sequential least-squares calibration of the gyro biases against the
+//! fine GNSS attitude (paper 001 with `D = E₃` and no reference drift), whose estimate corrects
+//! every later increment.
+//!
+//! `M` maps gyro (body) axes to the computed inertial frame `K`; with a perfect gyro `K` is
+//! fixed, so the fine filter works in the frame `F(t) = C_rK₀ M(t)`, in which the body's
+//! attitude is constant up to the gyro's errors (see [`super::fine`]).
+
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use crate::geometry::Quaternion;
+use crate::gyro::{
+    AttitudePropagator, BiasOnly, CalibratorConfig, EpochOutcome, GyroCalibrator,
+    LeastSquaresAccumulator, PulseDecoder, ReferenceDriftModel, ResidualCentering, SqrtInformation,
+};
+use crate::{CalibrationError, Real, ReceiverError};
+
+use super::config::GyroConfig;
+
+/// The reference (GNSS attitude) does not drift: no drift unknowns (`n = 0`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NoReferenceDrift;
+
+impl<T: Real> ReferenceDriftModel<T, 0> for NoReferenceDrift {
+    fn g(&self, _elapsed: T) -> SMatrix<T, 3, 0> {
+        SMatrix::zeros()
+    }
+}
+
+/// Weight of the prior rows `w₀ = 0` relative to one calibration equation: `w₀` is taken as
+/// twice as uncertain as one equation's noise (the reference's error at a single epoch).
+const W0_PRIOR_WEIGHT: f32 = 0.5;
+
+/// The calibrator the receiver runs: `x = [w₀; c₇..₉]`, 6 unknowns, Givens accumulator.
+pub type BiasCalibrator =
+    GyroCalibrator<BiasOnly, NoReferenceDrift, SqrtInformation<6>, 3, 0, 6, f32>;
+
+/// The receiver's gyro.
+#[derive(Clone, Debug)]
+pub(crate) struct GyroFrame {
+    pub config: GyroConfig,
+    propagator: AttitudePropagator<f32>,
+    decoder: Option<PulseDecoder<f32>>,
+    /// Increments received.
+    samples: u64,
+    /// Rate of the last completed step (corrected), rad/s, gyro axes.
+    rate: Vector3<f32>,
+    /// Bias correction applied to the increments, rad/s.
+    pub bias: Vector3<f32>,
+    calibrator: Option<BiasCalibrator>,
+    /// Samples at the start of the calibration window.
+    window_start: u64,
+    /// Calibrations applied.
+    pub calibrations: u32,
+    /// What the calibration windows gave.
+    pub report: CalibrationReport,
+}
+
+/// What the gyro calibration windows have given so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CalibrationReport {
+    /// Windows started.
+    pub started: u32,
+    /// Windows solved.
+    pub solved: u32,
+    /// Windows whose estimate was applied.
+    pub applied: u32,
+    /// Windows abandoned (a reference or an increment the calibrator refused, or a solve
+    /// that failed: rank deficient, not converged).
+    pub failed: u32,
+    /// The last estimate of the biases, rad/s (gyro axes).
+    pub last_bias: [f32; 3],
+    /// Its formal standard deviations, rad/s.
+    pub last_sigma: [f32; 3],
+}
+
+impl GyroFrame {
+    pub fn new(config: GyroConfig) -> Result<Self, ReceiverError> {
+        let decoder = match config.pulse_weight_rad {
+            Some(s) => Some(
+                PulseDecoder::new(s, ResidualCentering::IncrementCorrection)
+                    .map_err(|_| ReceiverError::InvalidConfig)?,
+            ),
+            None => None,
+        };
+        Ok(Self {
+            config,
+            propagator: AttitudePropagator::new(Quaternion::identity())
+                .map_err(|_| ReceiverError::InvalidConfig)?,
+            decoder,
+            samples: 0,
+            rate: Vector3::zeros(),
+            bias: Vector3::zeros(),
+            calibrator: None,
+            window_start: 0,
+            calibrations: 0,
+            report: CalibrationReport::default(),
+        })
+    }
+
+    /// Time of the last increment's end, s since the receiver started.
+    pub fn time_s(&self) -> f64 {
+        self.samples as f64 * seconds(self.config.sample_interval_s)
+    }
+
+    /// Increments received.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// True when the last increment completed a propagation step.
+    pub fn at_step(&self) -> bool {
+        self.samples > 0 && !self.propagator.mid_step()
+    }
+
+    /// Decodes pulse counts into an increment (rad, gyro axes).
+    pub fn decode(&mut self, counts: [i32; 3]) -> Result<Vector3<f32>, ReceiverError> {
+        let mut d = self.decoder.ok_or(ReceiverError::InvalidInput)?;
+        let theta = d.decode(counts).map_err(map_calibration)?;
+        self.decoder = Some(d);
+        Ok(theta)
+    }
+
+    /// Takes one increment (rad, gyro axes): corrected by the bias estimate, propagated, and
+    /// passed (uncorrected; the calibrator applies the correction itself) to the calibrator.
+    pub fn push(&mut self, theta: &Vector3<f32>) -> Result<(), ReceiverError> {
+        let h = self.config.sample_interval_s;
+        let corrected = theta - self.bias * h;
+        let mut propagator = self.propagator;
+        let step = propagator.push(&corrected).map_err(map_calibration)?;
+        let mut calibrator = self.calibrator.clone();
+        if let Some(c) = calibrator.as_mut() {
+            if c.push_increment(theta).is_err() {
+                calibrator = None;
+                self.report.failed += 1;
+            }
+        }
+        self.propagator = propagator;
+        self.calibrator = calibrator;
+        if let Some(s) = step {
+            self.rate = s.rotation_vector / (2.0 * h);
+        }
+        self.samples += 1;
+        Ok(())
+    }
+
+    /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate.
+    pub fn attitude_at(&self, t: f64) -> Quaternion<f32> {
+        let h = seconds(self.config.sample_interval_s);
+        // the propagator holds M at the last completed step
+        let step_samples = self.samples - (self.samples % 2);
+        let t_step = step_samples as f64 * h;
+        let dt = (t - t_step) as f32;
+        let m = self.propagator.attitude() * Quaternion::from_rotation_vector(&(self.rate * dt));
+        m.normalize().unwrap_or(m)
+    }
+
+    /// Starts a calibration window at the current step with the reference attitude `q_rb`.
+    pub fn start_calibration(&mut self, q_rb: &Quaternion<f32>) {
+        if !self.at_step() {
+            return;
+        }
+        let cfg = CalibratorConfig::new(self.config.sample_interval_s);
+        // A prior on w₀: the window starts at the reference itself (M(t₀) = N(t₀)), so w₀ is
+        // the reference's own error, about the noise of one equation. Without it the
+        // component of w₀ along a steady spin axis is unobservable (Φ(p) w₀ = p × w₀ = 0)
+        // and every solve of a slowly spinning body is rank deficient.
+        let mut prior = SqrtInformation::new();
+        for i in 0..3 {
+            let mut row = SVector::<f32, 6>::zeros();
+            if let Some(r) = row.get_mut(i) {
+                *r = W0_PRIOR_WEIGHT;
+            }
+            let _ = prior.add_row(&row, 0.0);
+        }
+        let c = BiasCalibrator::new(
+            cfg,
+            BiasOnly,
+            NoReferenceDrift,
+            prior,
+            // the calibrator integrates from the reference itself: both attitudes must be
+            // relative to the same (inertial) frame, which the receiver's own `M` is not
+            *q_rb,
+            *q_rb,
+        )
+        .and_then(|c| c.with_gyro_correction(self.bias));
+        match c {
+            Ok(c) => {
+                self.calibrator = Some(c);
+                self.report.started += 1;
+            }
+            Err(_) => {
+                self.calibrator = None;
+                self.report.failed += 1;
+            }
+        }
+        self.window_start = self.samples;
+    }
+
+    /// Whether a calibration window is open.
+    pub fn calibrating(&self) -> bool {
+        self.calibrator.is_some()
+    }
+
+    /// Adds the reference attitude `q_rb` at the current step; at the end of the window solves
+    /// and, when the estimate is well determined, applies it. Returns true when a calibration
+    /// was applied.
+    pub fn add_reference(&mut self, q_rb: &Quaternion<f32>) -> bool {
+        let Some(mut c) = self.calibrator.clone() else {
+            return false;
+        };
+        match c.add_reference(q_rb) {
+            Ok(EpochOutcome::Used(_)) | Ok(EpochOutcome::Skipped(_)) => {}
+            Err(_) => {
+                self.calibrator = None;
+                self.report.failed += 1;
+                return false;
+            }
+        }
+        let elapsed = (self.samples - self.window_start) as f32 * self.config.sample_interval_s;
+        if elapsed < self.config.calibration_window_s {
+            self.calibrator = Some(c);
+            return false;
+        }
+        let applied = match c.solve() {
+            Ok(est) => {
+                self.report.solved += 1;
+                self.report.last_bias = [est.c.x, est.c.y, est.c.z];
+                self.report.last_sigma = [est.c_std.x, est.c_std.y, est.c_std.z];
+                let usable = est.c.iter().all(|v| v.is_finite())
+                    && est
+                        .c_std
+                        .iter()
+                        .all(|&s| s <= self.config.calibration_max_sigma);
+                if usable {
+                    self.bias = est.c;
+                    self.calibrations += 1;
+                    self.report.applied += 1;
+                }
+                usable
+            }
+            Err(_) => {
+                self.report.failed += 1;
+                false
+            }
+        };
+        // next window, from the current reference
+        self.calibrator = None;
+        self.start_calibration(q_rb);
+        applied
+    }
+}
+
+/// A time step given in `f32` seconds as the `f64` it stands for (rounded to the nanosecond:
+/// `0.01f32` is 0.009 999 999 776 s, whose error would add up to milliseconds over hours).
+pub(crate) fn seconds(step: f32) -> f64 {
+    libm::round(f64::from(step) * 1e9) * 1e-9
+}
+
+fn map_calibration(e: CalibrationError) -> ReceiverError {
+    match e {
+        CalibrationError::NonFiniteInput => ReceiverError::NonFinite,
+        _ => ReceiverError::InvalidInput,
+    }
+}
