@@ -734,6 +734,14 @@ pub enum ReceiverError {
     StaleEpoch,
     /// A software tracking channel refused a hand-over or a sample block.
     Tracking(TrackingError),
+    /// The acquisition engine refused a search (too few samples, bad configuration).
+    Acquisition(AcquisitionError),
+}
+
+impl From<AcquisitionError> for ReceiverError {
+    fn from(e: AcquisitionError) -> Self {
+        Self::Acquisition(e)
+    }
 }
 
 impl From<TrackingError> for ReceiverError {
@@ -752,6 +760,7 @@ impl Error for ReceiverError {
             | Self::TooManySatellites
             | Self::StaleEpoch => ErrorKind::InvalidInput,
             Self::Tracking(e) => e.kind(),
+            Self::Acquisition(e) => e.kind(),
         }
     }
 }
@@ -766,6 +775,7 @@ impl fmt::Display for ReceiverError {
             Self::TooManySatellites => f.write_str("no free satellite slot"),
             Self::StaleEpoch => f.write_str("observation for an epoch already closed"),
             Self::Tracking(e) => write!(f, "tracking channel: {e}"),
+            Self::Acquisition(e) => write!(f, "acquisition: {e}"),
         }
     }
 }

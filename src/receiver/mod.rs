@@ -34,6 +34,9 @@
 //!   [`AttitudeReceiver::snapshot_estimate`], [`AttitudeReceiver::rigid_body_estimate`]);
 //!   [`ReceiverEvent`]s ([`AttitudeReceiver::pop_event`]) for what was detected and done.
 //!
+//! From raw samples, [`SampleReceiver`] owns the acquisition engine, the tracking channels
+//! and the adapter in front of an `AttitudeReceiver` (see [`samples`]).
+//!
 //! # Stages
 //!
 //! 1. **Single differences** ([`satellite`]): `z_P z_A*` per epoch, a counter per baseline
@@ -85,6 +88,7 @@ pub mod gyro_frame;
 mod output;
 #[allow(clippy::module_inception)]
 mod receiver;
+pub mod samples;
 pub mod satellite;
 
 #[cfg(test)]
@@ -95,6 +99,7 @@ pub use fine::FINE_STATES;
 pub use gyro_frame::{BiasCalibrator, CalibrationReport, NoReferenceDrift};
 pub use output::{AttitudeSource, ReceiverAttitude, ReceiverEvent, ReceiverHealth, StageEstimate};
 pub use receiver::{AttitudeReceiver, EVENT_QUEUE};
+pub use samples::{ChannelStatus, SampleFrontConfig, SampleReceiver, SampleReport};
 pub use satellite::SatelliteAiding;
 
 #[cfg(doc)]

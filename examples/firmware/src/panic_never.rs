@@ -74,6 +74,7 @@ fn main() -> ! {
     one_stage();
     signal_chain();
     receiver();
+    sample_receiver();
     loop {
         cortex_m::asm::nop();
     }
@@ -456,6 +457,39 @@ fn receiver() {
     while let Some(e) = r.pop_event() {
         let _ = black_box(e);
     }
+}
+
+/// The receiver from raw samples: search, start, push samples, release.
+#[inline(never)]
+fn sample_receiver() {
+    use gnss_attitude::receiver::{ReceiverConfig, SampleFrontConfig, SampleReceiver};
+    let antennas: [[f32; 3]; 3] = black_box([[0.29, 0.0, -0.05], [-0.14, 0.25, -0.05], [-0.14, -0.25, -0.05]]);
+    let config = ReceiverConfig::gps_l1(antennas, None);
+    let mut front = SampleFrontConfig::leo_complex(black_box(2.6e6));
+    front.acquisition.noncoherent_ms = black_box(1);
+    let Ok(mut rx) = SampleReceiver::<4, 1024>::new(config, front) else { return };
+    let Some(prn) = Prn::new(black_box(9)) else { return };
+    let si: [i8; 256] = black_box([1; 256]);
+    let sq: [i8; 256] = black_box([-1; 256]);
+    let _ = black_box(rx.search(prn, &si, Some(&sq), black_box(0)));
+    let acq = SearchResult {
+        prn,
+        detected: true,
+        metric: black_box(5.0),
+        threshold: black_box(2.0),
+        doppler_hz: black_box(100.0),
+        code_phase_chips: black_box(10.0),
+        first_sample: black_box(0),
+    };
+    let _ = black_box(rx.start(&acq));
+    if let Ok(block) = SampleBlock::complex(black_box(0), [&si[..], &si[..], &si[..]], [&sq[..], &sq[..], &sq[..]]) {
+        let _ = black_box(rx.push_samples(&block));
+    }
+    for c in rx.channels() {
+        let _ = black_box(c);
+    }
+    let _ = black_box(rx.attitude());
+    let _ = black_box(rx.release(prn));
 }
 
 #[panic_handler]

@@ -338,7 +338,8 @@ impl EpochClock {
             u128::from(correlations.first_sample) * 2 + u128::from(correlations.samples);
         let n = u128::from(self.samples_per_epoch);
         let shifted = (twice_mid + n).checked_sub(u128::from(self.origin) * 2)?;
-        u64::try_from(shifted / (2 * n)).ok()
+        // n > 0 by construction; checked so that no division-by-zero path is compiled in
+        u64::try_from(shifted.checked_div(2 * n)?).ok()
     }
 
     /// The receiver sample at the centre of filter epoch `k` (saturating).

@@ -5,7 +5,6 @@
 use std::collections::BTreeMap;
 
 use anyhow::Result;
-use gnss_attitude::attitude::one_stage::SatelliteObservation;
 use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::receiver::{
     AttitudeReceiver, AttitudeSource, GyroConfig, ReceiverConfig, ReceiverEvent, SatelliteAiding,
@@ -15,11 +14,12 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelState, EmulatedChannel, PhaseTransient, EPOCH_S};
-use super::sample_level::{SampleLevel, SampleStats};
+use super::sample_level::{locked, reported_cn0_dbhz, Front, SampleLevel, SampleStats};
 use super::world::{Blockage, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
 use crate::truth::sky::GpsView;
+use gnss_attitude::signal::Prn;
 
 /// Gyro sample interval, s.
 pub const GYRO_H: f64 = 0.01;
@@ -221,7 +221,10 @@ pub fn fly(
     );
     world.blockages = config.faults.blockages.clone();
     let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
-    let mut receiver = AttitudeReceiver::new(rcfg).map_err(|e| anyhow::anyhow!("receiver: {e}"))?;
+    let mut rx = Box::new(
+        Front::new(rcfg, SampleLevel::front_config())
+            .map_err(|e| anyhow::anyhow!("receiver: {e}"))?,
+    );
     let mut gyro = Gyro::new(GyroErrors::mems(), config.seed ^ 0x6779);
     let mut rng = rng(config.seed);
     let mut channels: BTreeMap<u8, EmulatedChannel> = BTreeMap::new();
@@ -238,11 +241,10 @@ pub fn fly(
             &world,
             config.sample_level_s + 0.5,
             config.seed,
-        )?)
+        ))
     } else {
         None
     };
-    let mut delivered: Vec<SatelliteObservation<f32>> = Vec::new();
     let epochs = (config.duration_s / EPOCH_S).round() as u64;
     let per_block = (AIDING_S / EPOCH_S).round() as u64;
     let mut views: (Vec<GpsView>, Vec<GpsView>) = (Vec::new(), Vec::new());
@@ -255,13 +257,18 @@ pub fn fly(
         if k == sample_epochs {
             // hand-over: the chain's locked satellites continue on the fast path
             if let Some(sl) = sample_level.take() {
-                for prn in sl.locked() {
+                for prn in locked(&rx) {
                     if let Some(ch) = channels.get_mut(&prn) {
                         ch.continue_tracking();
                         if let Some(edge) = sl.next_bit_edge_epoch(prn, t0) {
                             ch.align_bit_edges(edge);
                         }
                     }
+                }
+                // the fast path takes over: the core's channels close
+                let prns: Vec<u8> = rx.channels().map(|c| c.prn.number()).collect();
+                for p in prns.into_iter().filter_map(Prn::new) {
+                    rx.release(p);
                 }
                 record.sample_stats = Some(sl.stats().clone());
                 record.wall_s.0 = started.elapsed().as_secs_f64();
@@ -273,7 +280,7 @@ pub fn fly(
         if k > 0 && k % gyro_every == 0 {
             let inc = gyro.increment(&world.motion, t0 - GYRO_H, GYRO_H, 2);
             if let Some(p) = inc.pulses {
-                receiver
+                rx.receiver_mut()
                     .push_gyro_pulses(p)
                     .map_err(|e| anyhow::anyhow!("gyro: {e}"))?;
             }
@@ -343,7 +350,7 @@ pub fn fly(
             let mut wanted: Vec<&SatTruth> = truths
                 .iter()
                 .filter(|s| match &sample_level {
-                    Some(sl) if in_samples => sl.has_channel(s.view.prn),
+                    Some(_) if in_samples => Prn::new(s.view.prn).is_some_and(|p| rx.tracks(p)),
                     _ => channels
                         .get(&s.view.prn)
                         .is_some_and(|c| c.state != ChannelState::Idle),
@@ -372,23 +379,15 @@ pub fn fly(
                     }
                 })
                 .collect();
-            receiver
+            rx.receiver_mut()
                 .set_aiding(&aiding)
                 .map_err(|e| anyhow::anyhow!("aiding: {e}"))?;
         }
         // observations
         let line_bias = world.line_bias_rad;
         let mut tracked = 0;
-        delivered.clear();
         if let (Some(sl), true) = (sample_level.as_mut(), in_samples) {
-            sl.observations(k, &mut delivered)?;
-        }
-        for obs in &delivered {
-            match receiver.push_observation(k, obs) {
-                Ok(()) => tracked += 1,
-                Err(gnss_attitude::ReceiverError::NoAiding) => {}
-                Err(e) => anyhow::bail!("observation: {e}"),
-            }
+            tracked += sl.epoch(k, &mut rx)?.observations as usize;
         }
         for s in truths.iter().filter(|_| !in_samples) {
             let Some(ch) = channels.get_mut(&s.view.prn) else {
@@ -399,7 +398,7 @@ pub fn fly(
             }
             let psi = [0, 1, 2].map(|p| world.geometric_phase(p, &s.view.los, &c_ib));
             let obs = ch.observe(k, tc, s, psi, line_bias, &mut rng);
-            match receiver.push_observation(k, &obs) {
+            match rx.receiver_mut().push_observation(k, &obs) {
                 Ok(()) => tracked += 1,
                 Err(gnss_attitude::ReceiverError::NoAiding) => {}
                 Err(e) => anyhow::bail!("observation: {e}"),
@@ -407,16 +406,16 @@ pub fn fly(
         }
         // records
         if (k + 1) % per_block == 0 {
-            record_sample(&mut record, &receiver, &world, &gyro, &truths, tracked);
-            while let Some(e) = receiver.pop_event() {
+            record_sample(&mut record, rx.receiver(), &world, &gyro, &truths, tracked);
+            while let Some(e) = rx.receiver_mut().pop_event() {
                 record.events.push(((e.epoch() as f64 + 0.5) * EPOCH_S, e));
             }
             if (k + 1) % 1000 == 0 {
                 for s in &truths {
                     let ch = channels.get(&s.view.prn);
                     let (delivering, reported) = match &sample_level {
-                        Some(sl) if in_samples => {
-                            let r = sl.reported_cn0_dbhz(s.view.prn);
+                        Some(_) if in_samples => {
+                            let r = reported_cn0_dbhz(&rx, s.view.prn);
                             (r.is_some(), r.unwrap_or(0.0))
                         }
                         _ => (
@@ -445,9 +444,9 @@ pub fn fly(
     if let Some(sl) = sample_level {
         record.sample_stats = Some(sl.stats().clone());
     }
-    record.calibration = receiver.gyro_calibration();
+    record.calibration = rx.receiver_mut().gyro_calibration();
     let b = gyro.current_errors();
-    let est = receiver.gyro_bias();
+    let est = rx.receiver_mut().gyro_bias();
     record.gyro_bias = (
         Vector3::new(b[6], b[7], b[8]),
         Vector3::new(f64::from(est[0]), f64::from(est[1]), f64::from(est[2])),

@@ -3,8 +3,9 @@
 //! satellite), quantized to CS8, then the core's acquisition (±50 kHz, the satellites the
 //! almanac and the orbit predict above the reference antenna's mask, searched again every
 //! whole second for new ones), its fixed-point correlators and LEO tracking channels
-//! ([`ChannelConfig::leo`]) and the core's [`ObservationAdapter`] / [`EpochClock`]: what the
-//! receiver gets is what the crate's own signal chain produces. The fast path
+//! ([`ChannelConfig::leo`]), the adapter and the epoch clock, all inside the core's
+//! [`SampleReceiver`] in front of the flight's `AttitudeReceiver`: what the receiver gets is
+//! what the crate's own signal chain produces. The fast path
 //! ([`super::fast_path`]) continues from the channels this stretch hands over.
 //!
 //! Scene: every healthy satellite the reference antenna or another antenna receives during
@@ -17,13 +18,9 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{anyhow, Result};
-use gnss_attitude::attitude::one_stage::{
-    AdapterConfig, EpochClock, ObservationAdapter, SatelliteObservation,
-};
-use gnss_attitude::signal::{SampleBlock, SampleFormat};
-use gnss_attitude::tracking::{
-    AcquisitionConfig, Channel, ChannelConfig, ChannelState, TrackingEpoch,
-};
+use gnss_attitude::receiver::{SampleFrontConfig, SampleReceiver, SampleReport, MAX_SATELLITES};
+use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
+use gnss_attitude::tracking::{AcquisitionConfig, ChannelConfig};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -31,7 +28,8 @@ use rayon::prelude::*;
 
 use super::fast_path::EPOCH_S;
 use super::world::World;
-use crate::chain::{samples, search_prns, track_block, ChainParams, ANTENNAS};
+use crate::chain::{samples, ChainParams, ANTENNAS};
+use crate::synth::quantize::Planar;
 use crate::synth::scene::{mix, L1_WAVELENGTH};
 use crate::synth::{AttitudeMotion, FrontEnd, Satellite, SatelliteTrack, Scene};
 
@@ -73,32 +71,14 @@ pub struct SampleStats {
     pub tracking_s: f64,
 }
 
-/// A running channel and what the stretch knows about it.
-#[derive(Clone, Debug)]
-struct Live {
-    prn: u8,
-    /// Epochs of the current block.
-    epochs: Vec<TrackingEpoch<ANTENNAS>>,
-    /// Last reported C/N0, dB-Hz, and whether the last epoch had code and phase lock.
-    cn0_dbhz: f64,
-    locked: bool,
-    /// Time of the last locked epoch (or of the start), s.
-    last_lock_s: f64,
-}
-
-/// The live sample-level source.
+/// The live sample-level source: the scene and its current block of samples; the channels,
+/// the adapter and the epoch clock are the core's [`SampleReceiver`]'s.
 pub struct SampleLevel {
     params: ChainParams,
     /// PRN of each scene satellite.
     prns: Vec<u8>,
-    channels: Vec<(Channel<ANTENNAS>, Live)>,
-    adapter: ObservationAdapter,
-    clock: EpochClock,
-    /// First sample not yet tracked.
-    frontier: u64,
-    /// Observations waiting for their receiver epoch.
-    pending: BTreeMap<u64, Vec<SatelliteObservation<f32>>>,
-    next_epoch: u64,
+    /// The current block: its first sample and its decoded samples.
+    block: Option<(u64, Planar)>,
     stats: SampleStats,
 }
 
@@ -212,65 +192,42 @@ pub fn chain_params(world: &World, duration_s: f64, seed: u64) -> ChainParams {
 
 impl SampleLevel {
     /// The stretch of `world`'s first `duration_s` drawn with `seed`.
-    pub fn new(world: &World, duration_s: f64, seed: u64) -> Result<Self> {
+    pub fn new(world: &World, duration_s: f64, seed: u64) -> Self {
         let params = chain_params(world, duration_s, seed);
         let prns = params.scene.satellites.iter().map(|s| s.prn).collect();
         let mut stats = SampleStats {
             satellites: params.scene.satellites.len(),
             ..SampleStats::default()
         };
-        for (k, s) in params.scene.satellites.iter().enumerate() {
+        for k in 0..params.scene.satellites.len() {
             let f = |t: f64| params.scene.truth(k, 0, t).doppler_hz;
             let mut t = 0.0;
             while t < duration_s {
                 stats.max_doppler_hz = stats.max_doppler_hz.max(f(t).abs());
-                stats.max_doppler_rate_hz_s = stats
-                    .max_doppler_rate_hz_s
-                    .max(((f(t + 1.0) - f(t)) / 1.0).abs());
+                stats.max_doppler_rate_hz_s =
+                    stats.max_doppler_rate_hz_s.max((f(t + 1.0) - f(t)).abs());
                 t += 1.0;
             }
-            let _ = s;
         }
-        Ok(Self {
-            adapter: ObservationAdapter::new(AdapterConfig::default())
-                .map_err(|e| anyhow!("{e}"))?,
-            clock: EpochClock::new(u64::from(SAMPLES_PER_EPOCH / 2), SAMPLES_PER_EPOCH)
-                .map_err(|e| anyhow!("{e}"))?,
+        Self {
             params,
             prns,
-            channels: Vec::new(),
-            frontier: 0,
-            pending: BTreeMap::new(),
-            next_epoch: 0,
+            block: None,
             stats,
-        })
+        }
+    }
+
+    /// The front-end configuration of the core's receiver for this stretch.
+    pub fn front_config() -> SampleFrontConfig {
+        SampleFrontConfig {
+            release_after_samples: (DROP_AFTER_S * SAMPLE_RATE_HZ) as u64,
+            ..SampleFrontConfig::leo_complex(SAMPLE_RATE_HZ)
+        }
     }
 
     /// What the stretch saw so far.
     pub fn stats(&self) -> &SampleStats {
         &self.stats
-    }
-
-    /// The PRNs with a channel that delivers locked epochs now.
-    pub fn locked(&self) -> Vec<u8> {
-        self.channels
-            .iter()
-            .filter(|(_, l)| l.locked)
-            .map(|(_, l)| l.prn)
-            .collect()
-    }
-
-    /// Whether `prn` has a channel.
-    pub fn has_channel(&self, prn: u8) -> bool {
-        self.channels.iter().any(|(_, l)| l.prn == prn)
-    }
-
-    /// The C/N0 `prn`'s channel reports (`None` without a locked channel), dB-Hz.
-    pub fn reported_cn0_dbhz(&self, prn: u8) -> Option<f64> {
-        self.channels
-            .iter()
-            .find(|(_, l)| l.prn == prn && l.locked)
-            .map(|(_, l)| l.cn0_dbhz)
     }
 
     /// The first receiver epoch edge of `prn`'s data bits at or after `t` (s), from the
@@ -290,121 +247,102 @@ impl SampleLevel {
     }
 
     /// Satellites the almanac and orbit predict above the reference antenna's mask at `t`
-    /// without a channel.
-    fn to_search(&self, t: f64) -> Vec<u8> {
+    /// without a channel in `rx`.
+    fn to_search(&self, t: f64, rx: &Front) -> Vec<u8> {
         self.params
             .scene
             .satellites
             .iter()
             .filter(|s| {
                 s.track.as_ref().is_some_and(|tr| tr.cn0(0, t).is_finite())
-                    && !self.has_channel(s.prn)
+                    && Prn::new(s.prn).is_some_and(|p| !rx.tracks(p))
             })
             .map(|s| s.prn)
             .collect()
     }
 
-    /// Tracks the next block (searching first on whole seconds) and files its usable epochs
-    /// under their receiver epochs.
-    fn advance(&mut self) -> Result<()> {
-        let n = BLOCK;
-        let first = self.frontier;
-        let t_first = first as f64 / SAMPLE_RATE_HZ;
-        let started = std::time::Instant::now();
-        let planar = samples(&self.params, first, n)?;
-        self.stats.synthesis_s += started.elapsed().as_secs_f64();
-        // searches on whole seconds
-        if (t_first - t_first.round()).abs() < 1e-9 {
-            let prns = self.to_search(t_first);
-            if !prns.is_empty() {
-                let started = std::time::Instant::now();
-                let needed = self.params.acquisition.samples_needed();
-                let results = search_prns(
-                    &planar.i[0][..needed],
-                    Some(&planar.q[0][..needed]),
-                    first,
-                    &prns,
-                    &self.params.acquisition,
-                )?;
-                self.stats.acquisition_s += started.elapsed().as_secs_f64();
-                self.stats.searches += results.len();
-                for r in results.iter().filter(|r| r.detected) {
+    /// Receiver epoch `k` from samples: synthesizes the next block when `k` starts one,
+    /// searches the predicted satellites without a channel on whole seconds, and pushes the
+    /// epoch's samples through `rx`'s channels into its receiver.
+    pub fn epoch(&mut self, k: u64, rx: &mut Front) -> Result<SampleReport> {
+        let per = u64::from(SAMPLES_PER_EPOCH);
+        let first = k * per;
+        let stale = match &self.block {
+            Some((b0, p)) => first < *b0 || first + per > b0 + p.i[0].len() as u64,
+            None => true,
+        };
+        if stale {
+            let started = std::time::Instant::now();
+            let planar = samples(&self.params, first, BLOCK)?;
+            self.stats.synthesis_s += started.elapsed().as_secs_f64();
+            self.block = Some((first, planar));
+        }
+        let Some((b0, planar)) = &self.block else {
+            return Ok(SampleReport::default());
+        };
+        let off = (first - b0) as usize;
+        let t = first as f64 / SAMPLE_RATE_HZ;
+        if k % 1000 == 0 {
+            let needed = self.params.acquisition.samples_needed();
+            let prns = self.to_search(t, rx);
+            let started = std::time::Instant::now();
+            for p in prns {
+                let prn = Prn::new(p).ok_or_else(|| anyhow!("PRN {p}"))?;
+                let (i, q) = (
+                    planar.i[0].get(off..off + needed),
+                    planar.q[0].get(off..off + needed),
+                );
+                let (Some(i), Some(q)) = (i, q) else {
+                    break;
+                };
+                let r = rx
+                    .search(prn, i, Some(q), first)
+                    .map_err(|e| anyhow!("search PRN {p}: {e}"))?;
+                self.stats.searches += 1;
+                if r.detected {
                     self.stats.detections += 1;
-                    let mut ch = Channel::<ANTENNAS>::new(r.prn, &self.params.channel)?;
-                    ch.start(r)?;
                     self.stats.channels_started += 1;
-                    self.channels.push((
-                        ch,
-                        Live {
-                            prn: r.prn.number(),
-                            epochs: Vec::new(),
-                            cn0_dbhz: 0.0,
-                            locked: false,
-                            last_lock_s: t_first,
-                        },
-                    ));
                 }
             }
+            self.stats.acquisition_s += started.elapsed().as_secs_f64();
         }
         let started = std::time::Instant::now();
-        let iv: [&[i8]; ANTENNAS] = [&planar.i[0], &planar.i[1], &planar.i[2]];
-        let qv: [&[i8]; ANTENNAS] = [&planar.q[0], &planar.q[1], &planar.q[2]];
+        let r = off..off + per as usize;
+        let iv: [&[i8]; ANTENNAS] = [
+            &planar.i[0][r.clone()],
+            &planar.i[1][r.clone()],
+            &planar.i[2][r.clone()],
+        ];
+        let qv: [&[i8]; ANTENNAS] = [
+            &planar.q[0][r.clone()],
+            &planar.q[1][r.clone()],
+            &planar.q[2][r],
+        ];
         let block = SampleBlock::complex(first, iv, qv)?;
-        track_block(
-            &mut self.channels,
-            &block,
-            |_| true,
-            |live, e| live.epochs.push(*e),
-        )?;
+        let report = rx
+            .push_samples(&block)
+            .map_err(|e| anyhow!("samples of epoch {k}: {e}"))?;
         self.stats.tracking_s += started.elapsed().as_secs_f64();
-        self.frontier += n as u64;
-        let t_end = self.frontier as f64 / SAMPLE_RATE_HZ;
-        for (_, live) in self.channels.iter_mut() {
-            for e in live.epochs.drain(..) {
-                live.cn0_dbhz = f64::from(e.cn0_dbhz);
-                live.locked = e.lock.code && e.lock.phase && e.state == ChannelState::Tracking;
-                if live.locked {
-                    live.last_lock_s = e.correlations.first_sample as f64 / SAMPLE_RATE_HZ;
-                }
-                let obs = self
-                    .adapter
-                    .observe(&e, [0.0, 0.0, 1.0])
-                    .map_err(|e| anyhow!("{e}"))?;
-                let Some(obs) = obs else { continue };
-                match self.clock.epoch_of(&e.correlations) {
-                    Some(k) if k >= self.next_epoch => {
-                        self.pending.entry(k).or_default().push(obs);
-                    }
-                    Some(_) => self.stats.late += 1,
-                    None => {}
-                }
-            }
-        }
-        // close channels that lost their satellite (set, or never locked)
-        self.channels
-            .retain(|(_, live)| t_end - live.last_lock_s < DROP_AFTER_S);
-        Ok(())
+        self.stats.observations += report.observations as usize;
+        self.stats.late += report.late as usize;
+        Ok(report)
     }
+}
 
-    /// The observations of receiver epoch `k` (every satellite whose channel delivered a
-    /// usable epoch centred there).
-    pub fn observations(&mut self, k: u64, out: &mut Vec<SatelliteObservation<f32>>) -> Result<()> {
-        let needed = self.clock.sample_of(k) + 2 * u64::from(SAMPLES_PER_EPOCH);
-        while self.frontier < needed {
-            self.advance()?;
-        }
-        while let Some((&first, _)) = self.pending.first_key_value() {
-            if first >= k {
-                break;
-            }
-            self.pending.pop_first();
-        }
-        out.clear();
-        if let Some(obs) = self.pending.remove(&k) {
-            out.extend(obs);
-        }
-        self.next_epoch = k + 1;
-        self.stats.observations += out.len();
-        Ok(())
-    }
+/// The core's receiver from samples as host-sim runs it: 12 channels, 2048-point acquisition.
+pub type Front = SampleReceiver<MAX_SATELLITES, 2048>;
+
+/// The PRNs with a locked channel in `rx`.
+pub fn locked(rx: &Front) -> Vec<u8> {
+    rx.channels()
+        .filter(|c| c.locked)
+        .map(|c| c.prn.number())
+        .collect()
+}
+
+/// The C/N0 `prn`'s channel in `rx` reports (`None` without a locked channel), dB-Hz.
+pub fn reported_cn0_dbhz(rx: &Front, prn: u8) -> Option<f64> {
+    rx.channels()
+        .find(|c| c.prn.number() == prn && c.locked)
+        .map(|c| f64::from(c.cn0_dbhz))
 }

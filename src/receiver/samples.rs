@@ -1,0 +1,409 @@
+//! [`SampleReceiver`]: the whole receiver from raw samples, for a software front half: the
+//! acquisition engine, up to `S` tracking channels over the three antennas, the
+//! [`ObservationAdapter`] and [`EpochClock`] that turn their epochs into observations, and the
+//! [`AttitudeReceiver`] they feed, in one object.
+//!
+//! ```text
+//!  samples (3 antennas) ──► search(prn) ──► Acquisition<N> ──► detected: a Channel<3> starts
+//!          │
+//!          └──► push_samples(block) ──► every channel, 1 ms slices, round robin
+//!                     ──► ObservationAdapter (noise floor, lock gating) ──► EpochClock (epoch k)
+//!                     ──► AttitudeReceiver::push_observation(k) ──► attitude()
+//! ```
+//!
+//! The caller owns the sample buffers, the search schedule (which PRNs, when: with an almanac
+//! and an orbit, the ones predicted above the mask) and the navigation aiding and gyro
+//! ([`SampleReceiver::receiver_mut`]). The channels run one 1 ms slice at a time in turn, so
+//! the observations reach the receiver in epoch order whatever the block size. On a
+//! Cortex-M4F the software correlators keep up with about one channel (see the README's
+//! budgets): there a hardware correlator feeds [`AttitudeReceiver::push_observation`] directly
+//! and this type is for recorded samples and the host.
+
+use heapless::Vec;
+
+use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
+use crate::attitude::one_stage::{AdapterConfig, EpochClock, ObservationAdapter};
+use crate::signal::{Prn, SampleBlock};
+use crate::tracking::{
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, SearchResult,
+};
+use crate::{OneStageError, ReceiverError};
+
+/// What a [`SampleReceiver`] needs besides the [`ReceiverConfig`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SampleFrontConfig {
+    /// The acquisition search (sample rate, IF, Doppler span, non-coherent sums, false-alarm
+    /// probability).
+    pub acquisition: AcquisitionConfig,
+    /// The tracking channels ([`ChannelConfig::leo`] in orbit).
+    pub channel: ChannelConfig,
+    /// Noise normalization and lock gating of the channels' epochs.
+    pub adapter: AdapterConfig,
+    /// Receiver sample at the centre of receiver epoch 0 (half an epoch for a grid that
+    /// starts with the samples).
+    pub epoch_origin_sample: u64,
+    /// Samples per receiver epoch (the receiver's epoch times the sample rate: 2600 for 1 ms
+    /// at 2.6 Msps).
+    pub samples_per_epoch: u32,
+    /// A channel without a locked epoch for this many samples is closed (the satellite set,
+    /// or the hand-over failed); its PRN can be searched again.
+    pub release_after_samples: u64,
+}
+
+impl SampleFrontConfig {
+    /// Complex samples at `sample_rate_hz` (zero IF), LEO channels, a ±50 kHz search over
+    /// 20 ms, 1 ms epochs from sample 0, channels closed after 2 s without lock.
+    pub fn leo_complex(sample_rate_hz: f64) -> Self {
+        Self {
+            acquisition: AcquisitionConfig {
+                sample_rate_hz,
+                intermediate_frequency_hz: 0.0,
+                doppler_max_hz: 50_000.0,
+                doppler_step_hz: 500.0,
+                noncoherent_ms: 20,
+                false_alarm_probability: 1e-5,
+            },
+            channel: ChannelConfig::leo(sample_rate_hz, 0.0),
+            adapter: AdapterConfig::default(),
+            epoch_origin_sample: (sample_rate_hz * 0.5e-3) as u64,
+            samples_per_epoch: (sample_rate_hz * 1e-3) as u32,
+            release_after_samples: (2.0 * sample_rate_hz) as u64,
+        }
+    }
+}
+
+/// What one channel of a [`SampleReceiver`] is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChannelStatus {
+    /// The satellite.
+    pub prn: Prn,
+    /// Channel state after its last epoch.
+    pub state: ChannelState,
+    /// Its last C/N0 estimate, dB-Hz.
+    pub cn0_dbhz: f32,
+    /// Its last epoch had code and phase lock while tracking.
+    pub locked: bool,
+    /// Receiver sample of its last locked epoch (the hand-over's first sample before one).
+    pub last_lock_sample: u64,
+}
+
+/// What one [`SampleReceiver::push_samples`] call did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SampleReport {
+    /// Complete tracking epochs (all channels).
+    pub epochs: u32,
+    /// Observations the receiver accepted.
+    pub observations: u32,
+    /// Observations refused because the satellite has no aiding yet.
+    pub without_aiding: u32,
+    /// Observations refused because their epoch was already closed (should stay 0).
+    pub late: u32,
+    /// Channels closed for lack of lock.
+    pub released: u8,
+}
+
+/// The receiver from raw samples: acquisition engine (`N`-point FFT), up to `S` channels,
+/// adapter, epoch clock and the [`AttitudeReceiver`].
+#[derive(Clone, Debug)]
+pub struct SampleReceiver<const S: usize, const N: usize> {
+    config: SampleFrontConfig,
+    acquisition: Acquisition<N>,
+    channels: Vec<(Channel<3>, ChannelStatus), S>,
+    cursors: [usize; S],
+    adapter: ObservationAdapter,
+    clock: EpochClock,
+    receiver: AttitudeReceiver,
+    /// First sample the channels have not seen.
+    frontier: Option<u64>,
+}
+
+fn adapter_error(e: OneStageError) -> ReceiverError {
+    match e {
+        OneStageError::NonFiniteInput => ReceiverError::NonFinite,
+        OneStageError::InvalidConfig => ReceiverError::InvalidConfig,
+        _ => ReceiverError::InvalidInput,
+    }
+}
+
+impl<const S: usize, const N: usize> SampleReceiver<S, N> {
+    /// A receiver with no channels.
+    ///
+    /// # Errors
+    /// [`ReceiverError::InvalidConfig`] for an invalid receiver, acquisition, channel or
+    /// adapter configuration, zero samples per epoch, or an FFT size `N` outside 1024–8192.
+    pub fn new(receiver: ReceiverConfig, config: SampleFrontConfig) -> Result<Self, ReceiverError> {
+        let acquisition = Acquisition::<N>::new().map_err(|_| ReceiverError::InvalidConfig)?;
+        // the channel configuration is validated by a trial channel
+        Channel::<3>::new(
+            Prn::new(1).ok_or(ReceiverError::InvalidConfig)?,
+            &config.channel,
+        )?;
+        Ok(Self {
+            adapter: ObservationAdapter::new(config.adapter).map_err(adapter_error)?,
+            clock: EpochClock::new(config.epoch_origin_sample, config.samples_per_epoch)
+                .map_err(adapter_error)?,
+            receiver: AttitudeReceiver::new(receiver)?,
+            config,
+            acquisition,
+            channels: Vec::new(),
+            cursors: [0; S],
+            frontier: None,
+        })
+    }
+
+    /// The attitude receiver (estimates, health, events).
+    pub fn receiver(&self) -> &AttitudeReceiver {
+        &self.receiver
+    }
+
+    /// The attitude receiver, for the aiding and the gyro (and observations from elsewhere).
+    pub fn receiver_mut(&mut self) -> &mut AttitudeReceiver {
+        &mut self.receiver
+    }
+
+    /// The receiver's attitude ([`AttitudeReceiver::attitude`]).
+    pub fn attitude(&self) -> ReceiverAttitude {
+        self.receiver.attitude()
+    }
+
+    /// The channels' status, in the order they were started.
+    pub fn channels(&self) -> impl Iterator<Item = &ChannelStatus> {
+        self.channels.iter().map(|(_, s)| s)
+    }
+
+    /// Whether a channel tracks `prn`.
+    pub fn tracks(&self, prn: Prn) -> bool {
+        self.channels.iter().any(|(_, s)| s.prn == prn)
+    }
+
+    /// Searches `prn` in the reference antenna's samples `i` (and `q` for complex samples)
+    /// whose first sample is receiver sample `first_sample`; a detection starts a channel
+    /// that tracks from the first sample of the next [`Self::push_samples`] block. Searching
+    /// a PRN that already has a channel only reports.
+    ///
+    /// # Errors
+    /// [`ReceiverError::Acquisition`] for samples or a configuration the search refuses;
+    /// [`ReceiverError::TooManySatellites`] for a detection with all `S` channels busy (the
+    /// result is lost; close one first).
+    pub fn search(
+        &mut self,
+        prn: Prn,
+        i: &[i8],
+        q: Option<&[i8]>,
+        first_sample: u64,
+    ) -> Result<SearchResult, ReceiverError> {
+        let result = self
+            .acquisition
+            .search(prn, i, q, first_sample, &self.config.acquisition)?;
+        if result.detected && !self.tracks(prn) {
+            self.start(&result)?;
+        }
+        Ok(result)
+    }
+
+    /// Starts a channel from a detection made elsewhere (another engine, a hardware search).
+    ///
+    /// # Errors
+    /// [`ReceiverError::TooManySatellites`] with all `S` channels busy;
+    /// [`ReceiverError::Tracking`] for a result the channel refuses.
+    pub fn start(&mut self, result: &SearchResult) -> Result<(), ReceiverError> {
+        if self.channels.is_full() {
+            return Err(ReceiverError::TooManySatellites);
+        }
+        let mut channel = Channel::<3>::new(result.prn, &self.config.channel)?;
+        channel.start(result)?;
+        let status = ChannelStatus {
+            prn: result.prn,
+            state: channel.state(),
+            cn0_dbhz: 0.0,
+            locked: false,
+            last_lock_sample: self.frontier.unwrap_or(result.first_sample),
+        };
+        self.channels
+            .push((channel, status))
+            .map_err(|_| ReceiverError::TooManySatellites)
+    }
+
+    /// Closes `prn`'s channel; true when there was one.
+    pub fn release(&mut self, prn: Prn) -> bool {
+        let before = self.channels.len();
+        self.channels.retain(|(_, s)| s.prn != prn);
+        self.channels.len() < before
+    }
+
+    /// Runs every channel over `block` (the stream's next samples of the three antennas), one
+    /// receiver epoch of samples at a time in turn, and hands every usable epoch to the
+    /// receiver under its epoch; then closes the channels without lock for
+    /// [`SampleFrontConfig::release_after_samples`]. Bounded: at most
+    /// `block.len() / samples_per_epoch + 1` slices, each at most three epochs per channel.
+    ///
+    /// # Errors
+    /// [`ReceiverError::Tracking`] for a block that does not continue the stream (the
+    /// channels are then unusable: release them); [`ReceiverError::NonFinite`] /
+    /// [`ReceiverError::InvalidInput`] for an epoch the adapter or the receiver refuses.
+    pub fn push_samples(
+        &mut self,
+        block: &SampleBlock<'_, 3>,
+    ) -> Result<SampleReport, ReceiverError> {
+        let mut report = SampleReport::default();
+        let slice = self.config.samples_per_epoch.max(1) as usize;
+        for c in self.cursors.iter_mut() {
+            *c = 0;
+        }
+        let mut end = 0usize;
+        while end < block.len() {
+            end = (end + slice).min(block.len());
+            for (k, (channel, status)) in self.channels.iter_mut().enumerate() {
+                let Some(cursor) = self.cursors.get_mut(k) else {
+                    continue;
+                };
+                // each call stops at a code period's end: at most a few per slice
+                for _ in 0..4 {
+                    if *cursor >= end {
+                        break;
+                    }
+                    let sub = sub_block(block, end)?;
+                    let Some(epoch) = channel.process(&sub, cursor)? else {
+                        continue;
+                    };
+                    report.epochs += 1;
+                    status.state = epoch.state;
+                    status.cn0_dbhz = epoch.cn0_dbhz;
+                    status.locked = epoch.state == ChannelState::Tracking
+                        && epoch.lock.code
+                        && epoch.lock.phase;
+                    if status.locked {
+                        status.last_lock_sample = epoch.correlations.first_sample;
+                    }
+                    let obs = self
+                        .adapter
+                        .observe(&epoch, [0.0, 0.0, 1.0])
+                        .map_err(adapter_error)?;
+                    let (Some(obs), Some(k)) = (obs, self.clock.epoch_of(&epoch.correlations))
+                    else {
+                        continue;
+                    };
+                    match self.receiver.push_observation(k, &obs) {
+                        Ok(()) => report.observations += 1,
+                        Err(ReceiverError::NoAiding) => report.without_aiding += 1,
+                        Err(ReceiverError::StaleEpoch) => report.late += 1,
+                        Err(e) => return Err(e),
+                    }
+                }
+            }
+        }
+        let now = block.first_sample().saturating_add(block.len() as u64);
+        self.frontier = Some(now);
+        let limit = self.config.release_after_samples;
+        let before = self.channels.len();
+        self.channels
+            .retain(|(_, s)| now.saturating_sub(s.last_lock_sample) < limit);
+        report.released = before.saturating_sub(self.channels.len()) as u8;
+        Ok(report)
+    }
+}
+
+/// `block` cut at `end` samples (the channels' cursors index the same samples).
+fn sub_block<'a>(
+    block: &SampleBlock<'a, 3>,
+    end: usize,
+) -> Result<SampleBlock<'a, 3>, ReceiverError> {
+    let cut = |a: usize, f: fn(&SampleBlock<'a, 3>, usize) -> Option<&'a [i8]>| {
+        f(block, a).and_then(|s| s.get(..end)).unwrap_or(&[])
+    };
+    let i = [
+        cut(0, SampleBlock::i),
+        cut(1, SampleBlock::i),
+        cut(2, SampleBlock::i),
+    ];
+    let made = if block.is_complex() {
+        let q = [
+            cut(0, SampleBlock::q),
+            cut(1, SampleBlock::q),
+            cut(2, SampleBlock::q),
+        ];
+        SampleBlock::complex(block.first_sample(), i, q)
+    } else {
+        SampleBlock::real(block.first_sample(), i)
+    };
+    made.map_err(|e| ReceiverError::Tracking(crate::TrackingError::Signal(e)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::receiver::example::ExampleFlight;
+    use crate::AcquisitionError;
+
+    type Front = SampleReceiver<2, 1024>;
+
+    fn front() -> Front {
+        let mut config = SampleFrontConfig::leo_complex(1.023e6);
+        config.acquisition.doppler_max_hz = 1000.0;
+        config.acquisition.noncoherent_ms = 2;
+        SampleReceiver::new(ExampleFlight::config(false), config).expect("a valid set-up")
+    }
+
+    fn detection(prn: u8) -> SearchResult {
+        SearchResult {
+            prn: Prn::new(prn).expect("a PRN"),
+            detected: true,
+            metric: 10.0,
+            threshold: 1.0,
+            doppler_hz: 1200.0,
+            code_phase_chips: 100.0,
+            first_sample: 0,
+        }
+    }
+
+    #[test]
+    fn channels_start_from_detections_up_to_the_capacity_and_release_by_prn() {
+        let mut rx = front();
+        rx.start(&detection(3)).expect("room");
+        rx.start(&detection(7)).expect("room");
+        assert_eq!(
+            rx.start(&detection(9)),
+            Err(ReceiverError::TooManySatellites)
+        );
+        assert!(rx.tracks(Prn::new(7).unwrap()));
+        assert!(rx.release(Prn::new(3).unwrap()));
+        assert!(!rx.release(Prn::new(3).unwrap()));
+        assert_eq!(rx.channels().count(), 1);
+    }
+
+    #[test]
+    fn a_search_on_too_few_samples_is_a_typed_error() {
+        let mut rx = front();
+        let few = [0i8; 100];
+        assert_eq!(
+            rx.search(Prn::new(1).unwrap(), &few, Some(&few), 0),
+            Err(ReceiverError::Acquisition(
+                AcquisitionError::NotEnoughSamples
+            ))
+        );
+        assert_eq!(rx.channels().count(), 0);
+    }
+
+    #[test]
+    fn noise_alone_gives_epochs_but_no_observations_and_the_channel_is_released() {
+        let mut rx = front();
+        rx.start(&detection(5)).expect("room");
+        // 2.5 s of zero samples (no signal): epochs every ms, never locked
+        let zeros = [0i8; 1023];
+        let mut total = SampleReport::default();
+        for k in 0..2500u64 {
+            let block = SampleBlock::complex(k * 1023, [&zeros; 3], [&zeros; 3]).unwrap();
+            let r = rx.push_samples(&block).expect("a continuing stream");
+            total.epochs += r.epochs;
+            total.observations += r.observations;
+            total.released += r.released;
+        }
+        assert!(total.epochs > 1900, "epochs {}", total.epochs);
+        assert_eq!(total.observations, 0);
+        assert_eq!(total.released, 1);
+        assert_eq!(rx.channels().count(), 0);
+    }
+}
