@@ -46,11 +46,20 @@ pub const SCENARIO: Scenario = Scenario {
 /// The flight of a variant.
 pub fn flight(variant: &str, seed: u64) -> FlightConfig {
     let faults = FaultPlan {
-        blockages: vec![Blockage {
-            antenna: 1,
-            start: 200.0,
-            end: 220.0,
-        }],
+        // a short one inside the sample-level stretch (the core's correlators see it), the
+        // 20 s one later, when the gyro is calibrated
+        blockages: vec![
+            Blockage {
+                antenna: 2,
+                start: 40.0,
+                end: 42.0,
+            },
+            Blockage {
+                antenna: 1,
+                start: 200.0,
+                end: 220.0,
+            },
+        ],
         cycle_slip: Some((300.0004, 2)),
         bit_flip: Some(400.0107),
     };
