@@ -276,6 +276,16 @@ fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()
     )
 }
 
+/// A circle of radius `r` about the sky plot's centre, 2° steps.
+fn circle(r: f64) -> Vec<(f64, f64)> {
+    (0..=180)
+        .map(|i| {
+            let a = f64::from(i) * std::f64::consts::TAU / 180.0;
+            (r * a.sin(), r * a.cos())
+        })
+        .collect()
+}
+
 fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
     let err = |e: DrawingAreaErrorKind<_>| anyhow!("plot {}: {e:?}", path.display());
     let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
@@ -293,14 +303,8 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
     // rings every 30° of elevation, the 10° mask, spokes every 45° of azimuth
     for el in [0.0f64, 30.0, 60.0] {
         let r = 1.0 - el / 90.0;
-        let ring: Vec<(f64, f64)> = (0..=180)
-            .map(|i| {
-                let a = f64::from(i) * std::f64::consts::TAU / 180.0;
-                (r * a.sin(), r * a.cos())
-            })
-            .collect();
         chart
-            .draw_series(LineSeries::new(ring, BLACK.mix(0.3)))
+            .draw_series(LineSeries::new(circle(r), BLACK.mix(0.3)))
             .map_err(err)?;
         chart
             .draw_series(std::iter::once(Text::new(
@@ -311,14 +315,8 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
             .map_err(err)?;
     }
     let r_mask = 1.0 - 10.0 / 90.0;
-    let mask: Vec<(f64, f64)> = (0..=180)
-        .map(|i| {
-            let a = f64::from(i) * std::f64::consts::TAU / 180.0;
-            (r_mask * a.sin(), r_mask * a.cos())
-        })
-        .collect();
     chart
-        .draw_series(LineSeries::new(mask, RED.mix(0.5)))
+        .draw_series(LineSeries::new(circle(r_mask), RED.mix(0.5)))
         .map_err(err)?;
     for (az, label) in [(0.0f64, "+x"), (90.0, "+y"), (180.0, "−x"), (270.0, "−y")] {
         let a = az.to_radians();

@@ -3,7 +3,7 @@
 //! satellite), quantized to CS8, then the core's acquisition (±50 kHz, the satellites the
 //! almanac and the orbit predict above the reference antenna's mask, searched again every
 //! whole second for new ones), its fixed-point correlators and LEO tracking channels
-//! ([`ChannelConfig::leo`]), the adapter and the epoch clock, all inside the core's
+//! ([`ChannelConfig::leo`](gnss_attitude::tracking::ChannelConfig::leo)), the adapter and the epoch clock, all inside the core's
 //! [`SampleReceiver`] in front of the flight's `AttitudeReceiver`: what the receiver gets is
 //! what the crate's own signal chain produces. The fast path
 //! ([`super::fast_path`]) continues from the channels this stretch hands over.
@@ -20,7 +20,6 @@ use std::sync::Arc;
 use anyhow::{anyhow, Result};
 use gnss_attitude::receiver::{SampleFrontConfig, SampleReceiver, SampleReport, MAX_SATELLITES};
 use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
-use gnss_attitude::tracking::{AcquisitionConfig, ChannelConfig};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -172,19 +171,13 @@ pub fn chain_params(world: &World, duration_s: f64, seed: u64) -> ChainParams {
         },
         noise_seed: Some(seed ^ 0x6d69_6372_6f00),
     };
+    let front = SampleLevel::front_config();
     ChainParams {
         scene,
         format: SampleFormat::Cs8,
-        acquisition: AcquisitionConfig {
-            sample_rate_hz: SAMPLE_RATE_HZ,
-            intermediate_frequency_hz: 0.0,
-            doppler_max_hz: 50_000.0,
-            doppler_step_hz: 500.0,
-            noncoherent_ms: 20,
-            false_alarm_probability: 1e-5,
-        },
+        acquisition: front.acquisition,
         search_prns: Vec::new(),
-        channel: ChannelConfig::leo(SAMPLE_RATE_HZ, 0.0),
+        channel: front.channel,
         duration_s,
         block: BLOCK,
     }
