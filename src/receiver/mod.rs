@@ -90,6 +90,7 @@ mod output;
 mod receiver;
 pub mod samples;
 pub mod satellite;
+mod window;
 
 #[cfg(test)]
 mod tests;

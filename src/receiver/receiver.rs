@@ -7,24 +7,20 @@ use crate::attitude::ambiguity::AmbiguityResolver;
 use crate::attitude::baseline_epoch::AntennaArray as BaselineArray;
 use crate::attitude::one_stage::{LockStatus, SatelliteObservation};
 use crate::attitude::range_model::{BaselineCorrelation, Baselines};
-use crate::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
+use crate::attitude::rigid_body::RigidBodyFilter;
 use crate::attitude::snapshot::SnapshotSolver;
-use crate::ekf::GateConfidence;
 use crate::geometry::{Euler321, Quaternion};
 use crate::ReceiverError;
 
 use super::antenna::AntennaMonitor;
-use super::carrier::{
-    baseline_epoch, baselines_and_velocities, body_baselines, cold_start, predicted_sd, snapshot,
-    Windowed,
-};
+use super::carrier::body_baselines;
 use super::config::ReceiverConfig;
 use super::fine::FineStage;
 use super::gyro_frame::{seconds, CalibrationReport, GyroFrame};
 use super::output::{
     AttitudeSource, ReceiverAttitude, ReceiverEvent, ReceiverHealth, StageEstimate,
 };
-use super::satellite::{SatelliteAiding, Slot, WindowSd};
+use super::satellite::{SatelliteAiding, Slot};
 use super::MAX_SATELLITES;
 
 /// Events kept until read.
@@ -32,11 +28,11 @@ pub const EVENT_QUEUE: usize = 32;
 
 /// Where a coast on the gyro starts: the last locked fine attitude.
 #[derive(Clone, Copy, Debug)]
-struct Coast {
-    epoch: u64,
-    q_rb: Quaternion<f32>,
-    covariance: Matrix3<f32>,
-    m: Quaternion<f32>,
+pub(super) struct Coast {
+    pub(super) epoch: u64,
+    pub(super) q_rb: Quaternion<f32>,
+    pub(super) covariance: Matrix3<f32>,
+    pub(super) m: Quaternion<f32>,
 }
 
 /// The observations of one epoch.
@@ -53,35 +49,35 @@ struct Bucket {
 /// unchanged.
 #[derive(Clone, Debug)]
 pub struct AttitudeReceiver {
-    config: ReceiverConfig,
-    antennas: [Vector3<f32>; 3],
-    baselines: [Vector3<f32>; 2],
-    slots: Vec<Slot, MAX_SATELLITES>,
+    pub(super) config: ReceiverConfig,
+    pub(super) antennas: [Vector3<f32>; 3],
+    pub(super) baselines: [Vector3<f32>; 2],
+    pub(super) slots: Vec<Slot, MAX_SATELLITES>,
     /// The oldest open epoch; epochs `open` and `open + 1` are buffered.
-    open: u64,
-    started: bool,
+    pub(super) open: u64,
+    pub(super) started: bool,
     buckets: [Bucket; 2],
     /// The last closed epoch.
-    closed: Option<u64>,
-    resolver: AmbiguityResolver<2, f32>,
-    solver: SnapshotSolver<2, f32>,
-    fixed: bool,
-    fine: Option<FineStage>,
+    pub(super) closed: Option<u64>,
+    pub(super) resolver: AmbiguityResolver<2, f32>,
+    pub(super) solver: SnapshotSolver<2, f32>,
+    pub(super) fixed: bool,
+    pub(super) fine: Option<FineStage>,
     /// Latest snapshot and the gyro attitude at its epoch.
-    snapshot: Option<(StageEstimate, Quaternion<f32>)>,
-    rigid: Option<RigidBodyFilter<f32>>,
-    rigid_estimate: Option<StageEstimate>,
+    pub(super) snapshot: Option<(StageEstimate, Quaternion<f32>)>,
+    pub(super) rigid: Option<RigidBodyFilter<f32>>,
+    pub(super) rigid_estimate: Option<StageEstimate>,
     /// Epoch of the rigid-body filter's last step.
-    rigid_last: u64,
-    gyro: Option<GyroFrame>,
-    monitor: AntennaMonitor,
-    events: Deque<ReceiverEvent, EVENT_QUEUE>,
-    events_dropped: u32,
-    health: ReceiverHealth,
-    windows: u64,
+    pub(super) rigid_last: u64,
+    pub(super) gyro: Option<GyroFrame>,
+    pub(super) monitor: AntennaMonitor,
+    pub(super) events: Deque<ReceiverEvent, EVENT_QUEUE>,
+    pub(super) events_dropped: u32,
+    pub(super) health: ReceiverHealth,
+    pub(super) windows: u64,
     /// The fine attitude's covariance when it last updated (start of a coast).
     /// The last locked fine attitude: epoch, `q_rb`, covariance, and the gyro's `M` then.
-    coast_start: Option<Coast>,
+    pub(super) coast_start: Option<Coast>,
 }
 
 impl AttitudeReceiver {
@@ -396,7 +392,7 @@ impl AttitudeReceiver {
     // ---------------------------------------------------------------- internals
 
     /// Empty buckets for epochs `first` and `first + 1`.
-    fn reset_buckets(&mut self, first: u64) {
+    pub(super) fn reset_buckets(&mut self, first: u64) {
         for (i, b) in self.buckets.iter_mut().enumerate() {
             *b = Bucket::default();
             // the bucket of epoch e is e % 2
@@ -408,7 +404,7 @@ impl AttitudeReceiver {
         }
     }
 
-    fn event(&mut self, e: ReceiverEvent) {
+    pub(super) fn event(&mut self, e: ReceiverEvent) {
         if self.events.is_full() {
             let _ = self.events.pop_front();
             self.events_dropped = self.events_dropped.saturating_add(1);
@@ -417,14 +413,14 @@ impl AttitudeReceiver {
     }
 
     /// `M(t)` at the centre of `epoch` (identity without a gyro).
-    fn gyro_attitude(&self, epoch: u64) -> Quaternion<f32> {
+    pub(super) fn gyro_attitude(&self, epoch: u64) -> Quaternion<f32> {
         let t = (epoch as f64 + 0.5) * seconds(self.config.epoch_s);
         self.gyro
             .as_ref()
             .map_or_else(Quaternion::identity, |g| g.attitude_at(t))
     }
 
-    fn best_attitude(
+    pub(super) fn best_attitude(
         &self,
         epoch: u64,
         m: &Quaternion<f32>,
@@ -469,11 +465,11 @@ impl AttitudeReceiver {
         )
     }
 
-    fn any_blocked(&self) -> bool {
+    pub(super) fn any_blocked(&self) -> bool {
         self.health.antenna_blocked.iter().any(|&b| b)
     }
 
-    fn after_gyro_sample(&mut self) {
+    pub(super) fn after_gyro_sample(&mut self) {
         let Some(g) = self.gyro.as_ref() else {
             return;
         };
@@ -511,7 +507,7 @@ impl AttitudeReceiver {
     }
 
     /// Steps everything for epoch `k` with its observations.
-    fn close_epoch(&mut self, k: u64, observations: &[SatelliteObservation<f32>]) {
+    pub(super) fn close_epoch(&mut self, k: u64, observations: &[SatelliteObservation<f32>]) {
         let cfg = self.config;
         let m = self.gyro_attitude(k);
         // prompts in noise units with the line biases removed
@@ -646,7 +642,7 @@ impl AttitudeReceiver {
     // (not inlined: each stage's locals get a frame of their own, so the stack is the
     // largest stage's, not the sum of all)
     #[inline(never)]
-    fn restart_fine(&mut self, k: u64, m: &Quaternion<f32>) {
+    pub(super) fn restart_fine(&mut self, k: u64, m: &Quaternion<f32>) {
         let (q, cov, source) = self.best_attitude(k, m);
         let rates = self
             .fine
@@ -660,304 +656,5 @@ impl AttitudeReceiver {
                 FineStage::start(&self.config, &q, &cov, m, rates, k).ok()
             }
         };
-    }
-
-    /// The window that ends with epoch `k`.
-    // (not inlined: each stage's locals get a frame of their own, so the stack is the
-    // largest stage's, not the sum of all)
-    #[inline(never)]
-    fn close_window(&mut self, k: u64, m_now: &Quaternion<f32>) {
-        let cfg = self.config;
-        self.windows += 1;
-        let centre = k + 1 - u64::from(cfg.window_epochs / 2);
-        let mut windows = Vec::<Windowed, MAX_SATELLITES>::new();
-        let mut lost = Vec::<u8, MAX_SATELLITES>::new();
-        for (i, s) in self.slots.iter_mut().enumerate() {
-            let stale = s
-                .last_epoch
-                .is_some_and(|e| e + u64::from(cfg.window_epochs) <= k);
-            if let Some(w) = s.close_window(centre, &cfg) {
-                let _ = windows.push((i, w));
-            } else if stale {
-                let _ = lost.push(s.aiding.prn);
-                *s = Slot::new(s.aiding);
-            }
-        }
-        for &prn in lost.iter() {
-            self.event(ReceiverEvent::SatelliteLost { epoch: k, prn });
-        }
-        self.health.satellites_tracked = windows.len() as u8;
-        let m_centre = self.gyro_attitude(centre);
-        if !self.fixed {
-            self.try_cold_start(k, centre, &windows, &m_centre, m_now);
-        } else {
-            self.maintain_ambiguities(k, &windows, &m_centre, m_now);
-            if self.windows.checked_rem(u64::from(cfg.snapshot_windows)) == Some(0) {
-                self.run_snapshot(centre, &windows, &m_centre);
-            }
-            self.run_rigid_body(k, &windows);
-        }
-        self.health.satellites_fixed = self
-            .slots
-            .iter()
-            .filter(|s| s.ambiguity.iter().all(Option::is_some))
-            .count() as u8;
-    }
-
-    // (not inlined: each stage's locals get a frame of their own, so the stack is the
-    // largest stage's, not the sum of all)
-    #[inline(never)]
-    fn try_cold_start(
-        &mut self,
-        k: u64,
-        centre: u64,
-        windows: &[Windowed],
-        m_centre: &Quaternion<f32>,
-        m_now: &Quaternion<f32>,
-    ) {
-        let cfg = self.config;
-        let candidates = windows
-            .iter()
-            .filter(|(_, w)| w.valid == [true, true])
-            .count();
-        if candidates < usize::from(cfg.min_cold_start_satellites) || self.any_blocked() {
-            return;
-        }
-        let sigma_ref = cfg.ambiguity.phase_sigma_m / cfg.wavelength_m();
-        let Some((solution, ks)) = cold_start(&self.resolver, windows, sigma_ref) else {
-            self.event(ReceiverEvent::FixRefused { epoch: k });
-            return;
-        };
-        for (slot, kk) in &ks {
-            if let Some(s) = self.slots.get_mut(*slot) {
-                s.ambiguity = [Some(kk[0]), Some(kk[1])];
-            }
-        }
-        self.fixed = true;
-        self.health.ambiguities_fixed = true;
-        let est = StageEstimate {
-            epoch: centre,
-            q_rb: solution.q_rb,
-            covariance: solution.covariance,
-        };
-        self.snapshot = Some((est, *m_centre));
-        self.event(ReceiverEvent::FirstFix {
-            epoch: k,
-            satellites: ks.len() as u8,
-        });
-        // the fine filter starts at the current epoch
-        let q_now = solution.q_rb * m_centre.conjugate() * *m_now;
-        self.fine = FineStage::start(
-            &cfg,
-            &q_now,
-            &solution.covariance,
-            m_now,
-            Vector3::zeros(),
-            k,
-        )
-        .ok();
-    }
-
-    /// The attitude to check the single differences against at the window's centre, and the
-    /// largest SD error (cycles) it can cause.
-    fn trusted_attitude(
-        &self,
-        centre: u64,
-        m_centre: &Quaternion<f32>,
-    ) -> Option<(Matrix3<f32>, f32)> {
-        let (q, cov, source) = self.best_attitude(centre, m_centre);
-        if source == AttitudeSource::None {
-            return None;
-        }
-        let sigma = libm::sqrtf(cov.trace().max(0.0));
-        let longest = self.baselines[0].norm().max(self.baselines[1].norm());
-        Some((
-            q.to_dcm(),
-            3.0 * sigma * longest / self.config.wavelength_m(),
-        ))
-    }
-
-    // (not inlined: each stage's locals get a frame of their own, so the stack is the
-    // largest stage's, not the sum of all)
-    #[inline(never)]
-    fn maintain_ambiguities(
-        &mut self,
-        k: u64,
-        windows: &[Windowed],
-        m_centre: &Quaternion<f32>,
-        _m_now: &Quaternion<f32>,
-    ) {
-        let cfg = self.config;
-        let centre = k + 1 - u64::from(cfg.window_epochs / 2);
-        let Some((c_rb, sd_error)) = self.trusted_attitude(centre, m_centre) else {
-            return;
-        };
-        if sd_error > 0.15 {
-            return;
-        }
-        let lambda = cfg.wavelength_m();
-        let mut events = Vec::<ReceiverEvent, 24>::new();
-        for (slot, w) in windows {
-            let Some(s) = self.slots.get_mut(*slot) else {
-                continue;
-            };
-            let had_all = s.ambiguity.iter().all(Option::is_some);
-            for p in 0..2 {
-                let (Some(&valid), Some(&phase), Some(amb)) =
-                    (w.valid.get(p), w.phase.get(p), s.ambiguity.get_mut(p))
-                else {
-                    continue;
-                };
-                if !valid {
-                    continue;
-                }
-                let predicted = predicted_sd(&c_rb, &self.baselines, p, &w.los, lambda);
-                let offset = phase - predicted; // = K if the window is clean
-                let nearest = libm::roundf(offset);
-                let clean = (offset - nearest).abs() < 0.2;
-                let dropped = s.dropped.get_mut(p);
-                match amb {
-                    Some(kk) => {
-                        let residual = offset - *kk as f32;
-                        if residual.abs() > cfg.slip_threshold_cycles {
-                            if clean {
-                                let cycles = (nearest as i32 - *kk).clamp(-127, 127) as i8;
-                                *amb = Some(nearest as i32);
-                                let _ = events.push(ReceiverEvent::CycleSlip {
-                                    epoch: k,
-                                    prn: w.prn,
-                                    antenna: (p + 1) as u8,
-                                    cycles,
-                                });
-                            } else {
-                                *amb = None;
-                            }
-                        }
-                    }
-                    None if clean => {
-                        *amb = Some(nearest as i32);
-                        // a window that dropped the integer because the counter jumped: the
-                        // re-fix tells whether whole cycles were lost
-                        if let Some(d) = dropped {
-                            if let Some(old) = d.take() {
-                                let cycles = (nearest as i32 - old).clamp(-127, 127) as i8;
-                                if cycles != 0 {
-                                    let _ = events.push(ReceiverEvent::CycleSlip {
-                                        epoch: k,
-                                        prn: w.prn,
-                                        antenna: (p + 1) as u8,
-                                        cycles,
-                                    });
-                                }
-                            }
-                        }
-                    }
-                    None => {}
-                }
-            }
-            if !had_all && s.ambiguity.iter().all(Option::is_some) {
-                let _ = events.push(ReceiverEvent::AmbiguityFixed {
-                    epoch: k,
-                    prn: w.prn,
-                });
-            }
-        }
-        for &e in events.iter() {
-            self.event(e);
-        }
-    }
-
-    fn fixed_windows(
-        &self,
-        windows: &[Windowed],
-    ) -> Vec<(WindowSd, [i32; 2], Vector3<f32>), MAX_SATELLITES> {
-        let mut out = Vec::new();
-        for (slot, w) in windows {
-            let Some(s) = self.slots.get(*slot) else {
-                continue;
-            };
-            if let ([Some(kb), Some(kc)], [true, true]) = (s.ambiguity, w.valid) {
-                let _ = out.push((*w, [kb, kc], Vector3::from(s.aiding.los_rate)));
-            }
-        }
-        out
-    }
-
-    // (not inlined: each stage's locals get a frame of their own, so the stack is the
-    // largest stage's, not the sum of all)
-    #[inline(never)]
-    fn run_snapshot(&mut self, centre: u64, windows: &[Windowed], m_centre: &Quaternion<f32>) {
-        let fixed = self.fixed_windows(windows);
-        let mut pairs = Vec::<(WindowSd, [i32; 2]), MAX_SATELLITES>::new();
-        for (w, k, _) in &fixed {
-            let _ = pairs.push((*w, *k));
-        }
-        if pairs.len() < 3 {
-            return;
-        }
-        if let Some(s) = snapshot(&self.solver, &pairs, self.config.wavelength_m()) {
-            self.snapshot = Some((
-                StageEstimate {
-                    epoch: centre,
-                    q_rb: s.q_rb,
-                    covariance: s.covariance,
-                },
-                *m_centre,
-            ));
-        }
-    }
-
-    // (not inlined: each stage's locals get a frame of their own, so the stack is the
-    // largest stage's, not the sum of all)
-    #[inline(never)]
-    fn run_rigid_body(&mut self, k: u64, windows: &[Windowed]) {
-        let cfg = self.config;
-        let fixed = self.fixed_windows(windows);
-        if fixed.len() < 4 || self.any_blocked() {
-            return;
-        }
-        let Some((a, v)) = baselines_and_velocities(&fixed, cfg.wavelength_m()) else {
-            return;
-        };
-        let half = 0.5 * cfg.window_s();
-        let epoch = baseline_epoch(&a, &v, half);
-        // a gap (blocked antenna, too few satellites) leaves the filter behind the body: it
-        // has no gyro, so it starts again from the receiver's attitude
-        if self.rigid_last + u64::from(cfg.window_epochs) < k {
-            self.rigid = None;
-        }
-        if self.rigid.is_none() {
-            let m_now = self.gyro_attitude(k);
-            let (q0, cov, source) = self.best_attitude(k, &m_now);
-            if source == AttitudeSource::None {
-                return;
-            }
-            let rb_config = RigidBodyConfig {
-                dt: cfg.window_s(),
-                sigma_baseline: cfg.baseline_sigma_m,
-                sigma_velocity: cfg.velocity_sigma_m_s,
-                gate: Some(GateConfidence::P999),
-            };
-            let Ok(array) = BaselineArray::new(self.antennas) else {
-                return;
-            };
-            let p0 = cov + Matrix3::identity() * 1e-6;
-            self.rigid = RigidBodyFilter::new(&array, rb_config, &q0, &p0).ok();
-            self.rigid_last = k;
-            return;
-        }
-        if let Some(r) = self.rigid.as_mut() {
-            match r.step(&epoch) {
-                Ok(e) => {
-                    self.rigid_last = k;
-                    self.rigid_estimate = Some(StageEstimate {
-                        epoch: k,
-                        q_rb: e.q_rb,
-                        covariance: e.covariance,
-                    });
-                }
-                Err(_) => self.rigid = None,
-            }
-        }
     }
 }
