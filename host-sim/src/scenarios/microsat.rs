@@ -60,7 +60,8 @@ pub fn flight(variant: &str, seed: u64) -> FlightConfig {
                 end: 220.0,
             },
         ],
-        cycle_slip: Some((300.0004, 2)),
+        // one in the samples (the core's correlators see it), one on the fast path
+        cycle_slips: vec![(50.0004, 1), (300.0004, 2)],
         bit_flip: Some(400.0107),
     };
     let base = FlightConfig {

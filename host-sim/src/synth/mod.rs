@@ -14,5 +14,6 @@ pub mod quantize;
 pub mod scene;
 
 pub use scene::{
-    AnalogSamples, AttitudeMotion, FrontEnd, Satellite, SatelliteTrack, Scene, SignalTruth,
+    AnalogSamples, AttitudeMotion, CarrierStep, FrontEnd, Satellite, SatelliteTrack, Scene,
+    SignalTruth,
 };

@@ -87,6 +87,22 @@ pub struct SatelliteTrack {
     /// C/N0 per point and antenna (`[k][P]`), dB-Hz; `f64::NEG_INFINITY` where the antenna
     /// does not receive the satellite (below its mask, blocked).
     pub cn0_dbhz: Vec<Vec<f64>>,
+    /// Carrier-only phase steps (cycle slips of one antenna's RF chain; the code is unchanged).
+    pub carrier_steps: Vec<CarrierStep>,
+}
+
+/// A carrier phase step of one antenna: `cycles` added linearly over `duration_s` from
+/// `start_s` (a cycle slip as the antenna's carrier sees it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CarrierStep {
+    /// Antenna (0 = A).
+    pub antenna: usize,
+    /// Start, s.
+    pub start_s: f64,
+    /// Duration of the ramp, s (> 0).
+    pub duration_s: f64,
+    /// Cycles added.
+    pub cycles: f64,
 }
 
 impl SatelliteTrack {
@@ -139,6 +155,15 @@ impl SatelliteTrack {
         let (k, u) = self.locate(t);
         let (a, b) = (at(k).unwrap_or(0.0), at(k + 1).unwrap_or(0.0));
         a + (b - a) * u
+    }
+
+    /// Carrier phase added by the steps of antenna `antenna` until `t`, cycles.
+    pub fn carrier_offset(&self, antenna: usize, t: f64) -> f64 {
+        self.carrier_steps
+            .iter()
+            .filter(|c| c.antenna == antenna && t > c.start_s)
+            .map(|c| c.cycles * ((t - c.start_s) / c.duration_s.max(1e-12)).min(1.0))
+            .sum()
     }
 
     /// `μ·r_P` of antenna `antenna` at `t`, m.
@@ -252,17 +277,19 @@ impl Scene {
     /// The truth of satellite `sat` at antenna `antenna` at time `t` (s).
     pub fn truth(&self, sat: usize, antenna: usize, t: f64) -> SignalTruth {
         let s = &self.satellites[sat];
-        let (geo_m, dopp_cycles, doppler_hz) = match &s.track {
+        let (geo_m, dopp_cycles, doppler_hz, step_cycles) = match &s.track {
             Some(track) => (
                 track.geometry(antenna, t),
                 -(track.range(t) - track.range(0.0)) / L1_WAVELENGTH,
                 -track.range_rate(t) / L1_WAVELENGTH,
+                track.carrier_offset(antenna, t),
             ),
             None => (
                 s.los_ref
                     .dot(&(self.attitude.c_rb(t) * self.antennas_b[antenna])),
                 s.doppler_hz * t + 0.5 * s.doppler_rate_hz_s * t * t,
                 s.doppler_hz + s.doppler_rate_hz_s * t,
+                0.0,
             ),
         };
         let code = s.code_phase_chips
@@ -275,6 +302,7 @@ impl Scene {
             carrier_phase_cycles: s.carrier_phase_cycles
                 + dopp_cycles
                 + geo_m / L1_WAVELENGTH
+                + step_cycles
                 + self.line_bias_cycles.get(antenna).copied().unwrap_or(0.0),
             doppler_hz,
         }
@@ -471,6 +499,12 @@ mod tests {
             cn0_dbhz: (0..n)
                 .map(|k| vec![45.0, if k < 100 { 40.0 } else { f64::NEG_INFINITY }])
                 .collect(),
+            carrier_steps: vec![CarrierStep {
+                antenna: 1,
+                start_s: 1.0,
+                duration_s: 0.004,
+                cycles: 1.0,
+            }],
         };
         for &t in &[0.0021, 0.0037, 0.5, 0.7351, 1.9949] {
             assert!((track.range(t) - r(t)).abs() < 1e-6, "range at {t}");
@@ -489,5 +523,10 @@ mod tests {
         assert_eq!(track.cn0(1, 1.5), f64::NEG_INFINITY);
         // clamped past the end
         assert!(track.range(5.0).is_finite());
+        // the slip: antenna B only, a ramp of one cycle over 4 ms
+        assert_eq!(track.carrier_offset(0, 1.5), 0.0);
+        assert_eq!(track.carrier_offset(1, 0.999), 0.0);
+        assert!((track.carrier_offset(1, 1.002) - 0.5).abs() < 1e-9);
+        assert_eq!(track.carrier_offset(1, 1.5), 1.0);
     }
 }

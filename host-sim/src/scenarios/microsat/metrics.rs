@@ -385,8 +385,9 @@ pub fn evaluate_faults(
             ),
         });
     }
-    if let (Some((ts, antenna)), Some(prn)) = (plan.cycle_slip, record.fault_prns.0) {
-        let slip = record
+    for slip in &record.slips {
+        let (ts, antenna, prn) = (slip.start_s, slip.antenna, slip.prn);
+        let found = record
             .events
             .iter()
             .find(|(t, e)| {
@@ -396,15 +397,20 @@ pub fn evaluate_faults(
             })
             .copied();
         let att = attitude_recovery(samples, ts, 1.0);
+        let path = if ts < record.sample_level_s {
+            "in the samples"
+        } else {
+            "on the fast path"
+        };
         out.push(FaultOutcome {
-            name: "cycle slip".into(),
-            detected: slip.is_some(),
-            recovered_s: slip.map(|(t, _)| t - ts).zip(att).map(|(s, a)| s.max(a)),
+            name: format!("cycle slip ({path})"),
+            detected: found.is_some(),
+            recovered_s: found.map(|(t, _)| t - ts).zip(att).map(|(s, a)| s.max(a)),
             at_s: ts,
             detail: format!(
-                "PRN {prn}, antenna {}: phase turned by one cycle in 4 ms; {}",
+                "PRN {prn}, antenna {}: carrier turned by one cycle in 4 ms; {}",
                 ["A", "B", "C"][antenna.min(2)],
-                match slip {
+                match found {
                     Some((t, ReceiverEvent::CycleSlip { cycles, .. })) => format!(
                         "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
                         t - ts
@@ -414,7 +420,7 @@ pub fn evaluate_faults(
             ),
         });
     }
-    if let (Some(tf), Some(prn)) = (record.bit_flip_s.or(plan.bit_flip), record.fault_prns.1) {
+    if let (Some(tf), Some(prn)) = (record.bit_flip_s.or(plan.bit_flip), record.bit_flip_prn) {
         let seen = find(
             tf,
             tf + 0.1,

@@ -14,7 +14,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelState, EmulatedChannel, PhaseTransient, EPOCH_S};
-use super::sample_level::{locked, reported_cn0_dbhz, Front, SampleLevel, SampleStats};
+use super::sample_level::{locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats};
 use super::world::{Blockage, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
@@ -33,8 +33,9 @@ pub const AIDING_S: f64 = 0.1;
 pub struct FaultPlan {
     /// Antenna blockages.
     pub blockages: Vec<Blockage>,
-    /// A one-cycle phase transient: (time, antenna); applied to the highest satellite.
-    pub cycle_slip: Option<(f64, usize)>,
+    /// One-cycle phase transients: (time, antenna); each applied to the highest satellite
+    /// (in the samples when it falls in the sample-level stretch, else on the fast path).
+    pub cycle_slips: Vec<(f64, usize)>,
     /// A data-bit transition at a wrong moment (time); applied to the highest satellite.
     pub bit_flip: Option<f64>,
 }
@@ -139,8 +140,10 @@ pub struct FlightRecord {
     pub horizon: Vec<(f64, u8, bool)>,
     /// When the data-bit flip was injected (mid-bit of its satellite), s.
     pub bit_flip_s: Option<f64>,
-    /// The PRN the cycle slip and bit flip were injected on.
-    pub fault_prns: (Option<u8>, Option<u8>),
+    /// The cycle slips injected: time, antenna, PRN.
+    pub slips: Vec<SampleSlip>,
+    /// The PRN the bit flip was injected on.
+    pub bit_flip_prn: Option<u8>,
     /// The true gyro biases at the end, rad/s, and the estimate.
     pub gyro_bias: (Vector3<f64>, Vector3<f64>),
     /// The receiver's gyro calibration report at the end.
@@ -236,11 +239,24 @@ pub fn fly(
         ..FlightRecord::default()
     };
     let sample_epochs = (config.sample_level_s / EPOCH_S).round() as u64;
+    // the slips inside the sample-level stretch go into the scene, on the highest satellite
+    for &(ts, antenna) in &config.faults.cycle_slips {
+        if ts < config.sample_level_s {
+            if let Some(prn) = highest(&world.satellites(ts)) {
+                record.slips.push(SampleSlip {
+                    start_s: ts,
+                    antenna,
+                    prn,
+                });
+            }
+        }
+    }
     let mut sample_level = if sample_epochs > 0 {
         Some(SampleLevel::new(
             &world,
             config.sample_level_s + 0.5,
             config.seed,
+            &record.slips,
         ))
     } else {
         None
@@ -250,7 +266,6 @@ pub fn fly(
     let mut views: (Vec<GpsView>, Vec<GpsView>) = (Vec::new(), Vec::new());
     let mut was_visible: BTreeMap<u8, bool> = BTreeMap::new();
     let started = std::time::Instant::now();
-    let mut faults_assigned = false;
     for k in 0..epochs {
         let t0 = k as f64 * EPOCH_S;
         let tc = t0 + 0.5 * EPOCH_S;
@@ -302,9 +317,9 @@ pub fn fly(
             truths.push(world.antenna_view(&v, &c_ib, tc));
         }
         // faults go to the highest satellite at their time
-        if !faults_assigned && k % per_block == 0 {
-            if let Some((ts, antenna)) = config.faults.cycle_slip {
-                if t0 + AIDING_S >= ts && t0 <= ts {
+        if k % per_block == 0 {
+            for &(ts, antenna) in &config.faults.cycle_slips {
+                if ts >= config.sample_level_s && t0 + AIDING_S > ts && t0 <= ts {
                     if let Some(best) = highest(&truths) {
                         if let Some(ch) = channels.get_mut(&best) {
                             ch.transients.push(PhaseTransient {
@@ -314,22 +329,24 @@ pub fn fly(
                                 cycles: 1.0,
                             });
                         }
-                        record.fault_prns.0 = Some(best);
+                        record.slips.push(SampleSlip {
+                            start_s: ts,
+                            antenna,
+                            prn: best,
+                        });
                     }
                 }
             }
             if let Some(tf) = config.faults.bit_flip {
-                if t0 + AIDING_S >= tf && t0 <= tf {
+                if record.bit_flip_prn.is_none() && t0 + AIDING_S >= tf && t0 <= tf {
                     if let Some(best) = highest(&truths) {
                         if let Some(ch) = channels.get_mut(&best) {
                             record.bit_flip_s = Some(ch.schedule_bit_flip(tf));
                         }
-                        record.fault_prns.1 = Some(best);
+                        record.bit_flip_prn = Some(best);
                     }
                 }
             }
-            faults_assigned = record.fault_prns.0.is_some() == config.faults.cycle_slip.is_some()
-                && record.fault_prns.1.is_some() == config.faults.bit_flip.is_some();
         }
         // channel lives, horizon crossings
         for s in &truths {

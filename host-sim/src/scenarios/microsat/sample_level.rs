@@ -30,7 +30,7 @@ use super::world::World;
 use crate::chain::{samples, ChainParams, ANTENNAS};
 use crate::synth::quantize::Planar;
 use crate::synth::scene::{mix, L1_WAVELENGTH};
-use crate::synth::{AttitudeMotion, FrontEnd, Satellite, SatelliteTrack, Scene};
+use crate::synth::{AttitudeMotion, CarrierStep, FrontEnd, Satellite, SatelliteTrack, Scene};
 
 /// Sample rate, Hz.
 pub const SAMPLE_RATE_HZ: f64 = 2.6e6;
@@ -133,11 +133,42 @@ fn tracks(world: &World, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
         .collect()
 }
 
-/// The chain set-up of the stretch: scene from the world's first `duration_s`.
-pub fn chain_params(world: &World, duration_s: f64, seed: u64) -> ChainParams {
+/// A cycle slip in the samples: at `start_s`, antenna `antenna`'s carrier of satellite `prn`
+/// turns by one cycle in 4 ms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleSlip {
+    /// Time, s.
+    pub start_s: f64,
+    /// Antenna (1 = B, 2 = C).
+    pub antenna: usize,
+    /// Satellite.
+    pub prn: u8,
+}
+
+/// The chain set-up of the stretch: scene from the world's first `duration_s`, with `slips`
+/// in the carriers.
+pub fn chain_params(
+    world: &World,
+    duration_s: f64,
+    seed: u64,
+    slips: &[SampleSlip],
+) -> ChainParams {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6d73_616d_706c_6573);
     let satellites = tracks(world, duration_s)
         .into_iter()
+        .map(|(prn, mut track)| {
+            track.carrier_steps = slips
+                .iter()
+                .filter(|s| s.prn == prn)
+                .map(|s| CarrierStep {
+                    antenna: s.antenna,
+                    start_s: s.start_s,
+                    duration_s: 0.004,
+                    cycles: 1.0,
+                })
+                .collect();
+            (prn, track)
+        })
         .map(|(prn, track)| Satellite {
             prn,
             cn0_dbhz: track
@@ -184,9 +215,9 @@ pub fn chain_params(world: &World, duration_s: f64, seed: u64) -> ChainParams {
 }
 
 impl SampleLevel {
-    /// The stretch of `world`'s first `duration_s` drawn with `seed`.
-    pub fn new(world: &World, duration_s: f64, seed: u64) -> Self {
-        let params = chain_params(world, duration_s, seed);
+    /// The stretch of `world`'s first `duration_s` drawn with `seed`, with `slips`.
+    pub fn new(world: &World, duration_s: f64, seed: u64, slips: &[SampleSlip]) -> Self {
+        let params = chain_params(world, duration_s, seed, slips);
         let prns = params.scene.satellites.iter().map(|s| s.prn).collect();
         let mut stats = SampleStats {
             satellites: params.scene.satellites.len(),
