@@ -74,8 +74,8 @@
 //!
 //! # Memory and time
 //!
-//! Fixed size (about 9 KiB; twelve satellite slots, two epoch buffers, the stages). Per epoch:
-//! the fine filter's step dominates (see the README's budgets); per window: the least squares,
+//! Fixed size (7 224 B on the Cortex-M4F; twelve satellite slots, two epoch buffers, the
+//! stages). Per epoch: the fine filter's step dominates (see the README's budgets); per window: the least squares,
 //! the snapshot solver or the ambiguity search at the cold start (bounded by the resolver's
 //! node budget).
 

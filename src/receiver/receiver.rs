@@ -44,9 +44,9 @@ struct Bucket {
 
 /// The attitude receiver: tracking epochs in, attitude with covariance and health out.
 ///
-/// See the [module documentation](super) for the data path. Fixed memory (about 9 KiB), no
-/// allocation, no panics; every input is validated and a refused input leaves the receiver
-/// unchanged.
+/// See the [module documentation](super) for the data path. Fixed memory (7 224 B on the
+/// Cortex-M4F), no allocation, no panics; every input is validated and a refused input leaves
+/// the receiver unchanged.
 #[derive(Clone, Debug)]
 pub struct AttitudeReceiver {
     pub(super) config: ReceiverConfig,
