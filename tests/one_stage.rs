@@ -190,19 +190,6 @@ fn filter<T: gnss_attitude::Real, const N: usize>(
     OneStageFilter::new(config, array, &prior).expect("filter")
 }
 
-fn to_f64(o: &SatelliteObservation<f32>) -> SatelliteObservation<f64> {
-    SatelliteObservation {
-        id: o.id,
-        los: o.los.map(f64::from),
-        prompt: gnss_attitude::attitude::one_stage::PromptIq {
-            i: o.prompt.i.map(f64::from),
-            q: o.prompt.q.map(f64::from),
-        },
-        noise_var: f64::from(o.noise_var),
-        cn0_dbhz: f64::from(o.cn0_dbhz),
-    }
-}
-
 #[test]
 fn satellites_come_and_go_without_a_reset_and_f32_follows_f64() {
     let sky = sky_g1(8);
@@ -225,7 +212,7 @@ fn satellites_come_and_go_without_a_reset_and_f32_follows_f64() {
             _ => k % 1000 >= 50,
         };
         obs.retain(|o| keep(o.id));
-        let obs64: Vec<_> = obs.iter().map(to_f64).collect();
+        let obs64: Vec<_> = obs.iter().map(SatelliteObservation::to_f64).collect();
         let r32 = f32_filter.step(&obs).expect("f32 step");
         f64_filter.step(&obs64).expect("f64 step");
         let b32 = f64::from(f32_filter.angles().beta);
@@ -260,7 +247,7 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
         source
             .epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs)
             .expect("epoch");
-        let obs64: Vec<_> = obs.iter().map(to_f64).collect();
+        let obs64: Vec<_> = obs.iter().map(SatelliteObservation::to_f64).collect();
         let info = f.information(&obs64).expect("information");
         j_core = info.expected[(1, 1)];
         let u = info.gradient[1];
@@ -292,7 +279,7 @@ fn discriminator_slope_and_variance_equal_host_sims_fisher_information() {
         source
             .epoch(k as f64 * EPOCH_S, &rotation_about_y(0.0), &mut obs)
             .expect("epoch");
-        let obs64: Vec<_> = obs.iter().map(to_f64).collect();
+        let obs64: Vec<_> = obs.iter().map(SatelliteObservation::to_f64).collect();
         sum += shifted.information(&obs64).expect("information").gradient[1];
     }
     let slope = -sum / f64::from(n) / delta;

@@ -111,19 +111,6 @@ fn adapted(
     out
 }
 
-fn to_f64(o: &SatelliteObservation<f32>) -> SatelliteObservation<f64> {
-    SatelliteObservation {
-        id: o.id,
-        los: o.los.map(f64::from),
-        prompt: gnss_attitude::attitude::one_stage::PromptIq {
-            i: o.prompt.i.map(f64::from),
-            q: o.prompt.q.map(f64::from),
-        },
-        noise_var: f64::from(o.noise_var),
-        cn0_dbhz: f64::from(o.cn0_dbhz),
-    }
-}
-
 fn wrap(x: f64) -> f64 {
     (x + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI
 }
@@ -331,7 +318,7 @@ fn a_cold_start_from_the_snapshot_solver_pulls_in_on_samples() {
     let mut status = LockStatus::PullIn;
     for k in 200..=last {
         epoch.clear();
-        epoch.extend(obs.iter().filter(|(j, _)| *j == k).map(|(_, o)| to_f64(o)));
+        epoch.extend(obs.iter().filter(|(j, _)| *j == k).map(|(_, o)| o.to_f64()));
         status = filter.step(&epoch).unwrap().status;
     }
     assert_eq!(status, LockStatus::Locked);

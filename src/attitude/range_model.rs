@@ -63,12 +63,7 @@ impl<const M: usize, const N: usize, T: Real> RangeDifferences<M, N, T> {
         if !(sat.sigma > T::zero()) {
             return Err(SnapshotError::InvalidNoise);
         }
-        if self.sats.iter().any(|s| s.id == sat.id) {
-            return Err(SnapshotError::DuplicateSatellite);
-        }
-        self.sats
-            .push(sat)
-            .map_err(|_| SnapshotError::TooManySatellites)
+        push_unique(&mut self.sats, sat, |s| s.id)
     }
 
     /// The satellites, in insertion order.
@@ -138,12 +133,7 @@ impl<const M: usize, const N: usize, T: Real> PhaseObservations<M, N, T> {
         if !(sat.cofactor > T::zero()) {
             return Err(SnapshotError::InvalidNoise);
         }
-        if self.sats.iter().any(|s| s.id == sat.id) {
-            return Err(SnapshotError::DuplicateSatellite);
-        }
-        self.sats
-            .push(sat)
-            .map_err(|_| SnapshotError::TooManySatellites)
+        push_unique(&mut self.sats, sat, |s| s.id)
     }
 
     /// The satellites, in insertion order.
@@ -160,6 +150,18 @@ impl<const M: usize, const N: usize, T: Real> PhaseObservations<M, N, T> {
     pub fn is_empty(&self) -> bool {
         self.sats.is_empty()
     }
+}
+
+/// Appends `sat` unless a satellite with its identifier is already there.
+fn push_unique<S, const N: usize>(
+    sats: &mut Vec<S, N>,
+    sat: S,
+    id: impl Fn(&S) -> u8,
+) -> Result<(), SnapshotError> {
+    if sats.iter().any(|s| id(s) == id(&sat)) {
+        return Err(SnapshotError::DuplicateSatellite);
+    }
+    sats.push(sat).map_err(|_| SnapshotError::TooManySatellites)
 }
 
 /// Checks that a line of sight is finite and of unit length (to 1e-3).

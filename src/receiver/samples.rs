@@ -112,7 +112,6 @@ pub struct SampleReceiver<const S: usize, const N: usize> {
     config: SampleFrontConfig,
     acquisition: Acquisition<N>,
     channels: Vec<(Channel<3>, ChannelStatus), S>,
-    cursors: [usize; S],
     adapter: ObservationAdapter,
     clock: EpochClock,
     receiver: AttitudeReceiver,
@@ -149,7 +148,6 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
             config,
             acquisition,
             channels: Vec::new(),
-            cursors: [0; S],
             frontier: None,
         })
     }
@@ -250,22 +248,19 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     ) -> Result<SampleReport, ReceiverError> {
         let mut report = SampleReport::default();
         let slice = self.config.samples_per_epoch.max(1) as usize;
-        for c in self.cursors.iter_mut() {
-            *c = 0;
-        }
+        // each channel's position in `block`
+        let mut cursors = [0usize; S];
         let mut end = 0usize;
         while end < block.len() {
             end = (end + slice).min(block.len());
-            for (k, (channel, status)) in self.channels.iter_mut().enumerate() {
-                let Some(cursor) = self.cursors.get_mut(k) else {
-                    continue;
-                };
+            // the block up to this slice's end, shared by every channel
+            let sub = sub_block(block, end)?;
+            for ((channel, status), cursor) in self.channels.iter_mut().zip(cursors.iter_mut()) {
                 // each call stops at a code period's end: at most a few per slice
                 for _ in 0..4 {
                     if *cursor >= end {
                         break;
                     }
-                    let sub = sub_block(block, end)?;
                     let Some(epoch) = channel.process(&sub, cursor)? else {
                         continue;
                     };

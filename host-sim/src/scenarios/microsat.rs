@@ -132,17 +132,15 @@ fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightM
             r[0], r[1], r[2], b[0], b[1], b[2]
         )
     };
-    let at = o.summary.len().saturating_sub(7).min(o.summary.len());
     let mut lines = vec![
         format!(
-            "sample-level chain for the first {:.0} s: {} satellites in the scene (|Doppler| ≤ {:.1} kHz, |rate| ≤ {:.0} Hz/s), {} searches ±50 kHz, {} found, {} channels; {} observations, {} late; wall {:.1} s (synthesis {:.1}, acquisition {:.1}, tracking {:.1}), fast path {:.1} s",
+            "sample-level chain for the first {:.0} s: {} satellites in the scene (|Doppler| ≤ {:.1} kHz, |rate| ≤ {:.0} Hz/s), {} searches ±50 kHz, {} found (a channel each); {} observations, {} late; wall {:.1} s (synthesis {:.1}, acquisition {:.1}, tracking {:.1}), fast path {:.1} s",
             record.sample_level_s,
             st.satellites,
             st.max_doppler_hz / 1e3,
             st.max_doppler_rate_hz_s,
             st.searches,
             st.detections,
-            st.channels_started,
             st.observations,
             st.late,
             record.wall_s.0,
@@ -159,7 +157,7 @@ fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightM
         .summary
         .iter()
         .position(|l| l.starts_with("bound"))
-        .map_or(at, |p| p + 1);
+        .map_or(o.summary.len(), |p| p + 1);
     for (i, l) in lines.drain(..).enumerate() {
         o.summary.insert(pos + i, l);
     }

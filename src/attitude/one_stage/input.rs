@@ -40,6 +40,22 @@ pub struct SatelliteObservation<T = f32> {
     pub cn0_dbhz: T,
 }
 
+impl SatelliteObservation<f32> {
+    /// The same observation in `f64` (exact widening), for the f64 reference filter.
+    pub fn to_f64(&self) -> SatelliteObservation<f64> {
+        SatelliteObservation {
+            id: self.id,
+            los: self.los.map(f64::from),
+            prompt: PromptIq {
+                i: self.prompt.i.map(f64::from),
+                q: self.prompt.q.map(f64::from),
+            },
+            noise_var: f64::from(self.noise_var),
+            cn0_dbhz: f64::from(self.cn0_dbhz),
+        }
+    }
+}
+
 /// An observation after checking: unit line of sight, outputs in noise units, `q_T`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct CheckedObservation<T> {

@@ -102,17 +102,14 @@ impl EmulatedChannel {
     }
 
     /// Advances the channel's life to `t` given whether the reference antenna sees the
-    /// satellite; `search_now` starts an acquisition at `t` (for a channel that is idle).
+    /// satellite (an idle channel that sees it is searched at the next whole second).
     pub fn advance(&mut self, t: f64, reference_sees: bool) {
         self.state = match self.state {
             ChannelState::Idle if reference_sees => ChannelState::Acquiring {
                 // the receiver searches new satellites every whole second
                 ready_at: t.ceil().max(t) + PULL_IN_S,
             },
-            ChannelState::Acquiring { ready_at } if !reference_sees => {
-                let _ = ready_at;
-                ChannelState::Idle
-            }
+            ChannelState::Acquiring { .. } if !reference_sees => ChannelState::Idle,
             ChannelState::Acquiring { ready_at } if t >= ready_at => ChannelState::Tracking,
             ChannelState::Tracking if !reference_sees => ChannelState::Losing { until: t + LOSS_S },
             ChannelState::Losing { .. } if reference_sees => ChannelState::Tracking,

@@ -50,10 +50,8 @@ pub struct SampleStats {
     pub satellites: usize,
     /// PRN searches run (each ±50 kHz on 20 ms of the reference antenna).
     pub searches: usize,
-    /// Searches that found their satellite.
+    /// Searches that found their satellite (each starts a channel).
     pub detections: usize,
-    /// Channels started.
-    pub channels_started: usize,
     /// Observations handed to the receiver.
     pub observations: usize,
     /// Tracking epochs that arrived after their receiver epoch was handed out (should be 0).
@@ -325,7 +323,6 @@ impl SampleLevel {
                 self.stats.searches += 1;
                 if r.detected {
                     self.stats.detections += 1;
-                    self.stats.channels_started += 1;
                 }
             }
             self.stats.acquisition_s += started.elapsed().as_secs_f64();

@@ -54,19 +54,6 @@ impl InformationLoss {
     }
 }
 
-fn to_f64(o: &SatelliteObservation<f32>) -> SatelliteObservation<f64> {
-    SatelliteObservation {
-        id: o.id,
-        los: o.los.map(f64::from),
-        prompt: gnss_attitude::attitude::one_stage::PromptIq {
-            i: o.prompt.i.map(f64::from),
-            q: o.prompt.q.map(f64::from),
-        },
-        noise_var: f64::from(o.noise_var),
-        cn0_dbhz: f64::from(o.cn0_dbhz),
-    }
-}
-
 /// Measures the information of `epochs` (filter epoch `k` at `t = k·T`, truth from `cfg`'s
 /// motion and line biases), skipping the first `cfg.discard` of the run and empty epochs.
 pub fn measure(
@@ -103,7 +90,7 @@ pub fn measure(
         if obs.is_empty() {
             continue;
         }
-        let obs64: Vec<_> = obs.iter().map(to_f64).collect();
+        let obs64: Vec<_> = obs.iter().map(SatelliteObservation::to_f64).collect();
         let beta = cfg.motion.beta(k as f64 * EPOCH_S);
         let (u, expected) = u_at(beta, &obs64)?;
         let slope =
