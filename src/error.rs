@@ -51,22 +51,27 @@ impl fmt::Display for ErrorKind {
 }
 
 /// Errors of the Kalman filter toolkit ([`crate::ekf`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum FilterError {
     /// A state, covariance, transition, measurement, Jacobian or noise value was NaN or infinite.
+    #[error("non-finite filter input")]
     NonFiniteInput,
     /// A covariance given to the filter (initial covariance, process noise) is not symmetric
     /// positive semi-definite with a positive diagonal.
+    #[error("covariance is not symmetric positive semi-definite")]
     InvalidCovariance,
     /// A measurement noise variance is zero or negative.
+    #[error("measurement noise variance is not positive")]
     NonPositiveNoise,
     /// The innovation covariance `S = H P Hᵀ + R` is not positive definite, so the update cannot
     /// be weighed. Happens when `R` is not PD or `P` has lost definiteness.
+    #[error("innovation covariance is not positive definite")]
     InnovationNotPositiveDefinite,
     /// The step produced non-finite numbers from finite input (overflow). The state is
     /// unchanged.
+    #[error("filter step overflowed")]
     Numerical,
 }
 
@@ -80,20 +85,6 @@ impl Error for FilterError {
         }
     }
 }
-
-impl fmt::Display for FilterError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::NonFiniteInput => "non-finite filter input",
-            Self::InvalidCovariance => "covariance is not symmetric positive semi-definite",
-            Self::NonPositiveNoise => "measurement noise variance is not positive",
-            Self::InnovationNotPositiveDefinite => "innovation covariance is not positive definite",
-            Self::Numerical => "filter step overflowed",
-        })
-    }
-}
-
-impl core::error::Error for FilterError {}
 
 /// Errors of the geometry routines ([`crate::geometry`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
