@@ -30,6 +30,7 @@ fn bench(c: &mut Criterion) {
         cn0_min_dbhz: 40.0,
         cn0_max_dbhz: 50.0,
         seed: 1,
+        ..SynthSpec::default()
     };
     let (sc, truth) = scene(&spec).unwrap_or_else(|e| panic!("{e}"));
     let config = |max: f32| AcquisitionConfig {

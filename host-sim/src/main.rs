@@ -8,6 +8,8 @@
 //! host-sim track --file F [--file F2 --file F3] --format FMT --fs HZ [--seconds S]
 //!                [--baselines ... --sky CSV] [--json] [--out DIR]
 //! host-sim synth --out DIR --format FMT --fs HZ --seconds S [--antennas 3] [--leo]
+//!                [--no-noise] [--cn0 C1,C2,...] [--cw HZ,DB] [--dc I,Q] [--constant I,Q]
+//! host-sim acquisition-stats [--searches 200] [--markdown docs/ACQUISITION.md]
 //! ```
 //! With `--json`, stdout carries exactly one JSON object; progress and logs go to stderr.
 
@@ -96,6 +98,26 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Measure the acquisition's detection probability and false alarms on every background
+    /// (thermal noise, noise-free, strong signals, saturated, zero, DC, CW) and the phantom
+    /// lock of `track` on a noise-free recording; optionally write them as markdown.
+    AcquisitionStats {
+        /// Thermal-noise recordings (detection probability and false-alarm rate).
+        #[arg(long, default_value_t = 200)]
+        searches: usize,
+        /// Recordings of each other random background.
+        #[arg(long, default_value_t = 10)]
+        seeds: usize,
+        /// Seconds of the noise-free recording tracked.
+        #[arg(long, default_value_t = 10.0)]
+        track_seconds: f64,
+        /// Write the figures into this markdown file (e.g. docs/ACQUISITION.md).
+        #[arg(long)]
+        markdown: Option<PathBuf>,
+        /// Print one JSON object on stdout instead of the markdown.
+        #[arg(long)]
+        json: bool,
+    },
     /// Synthesize a recording (sample files, truth JSON, sky CSV) in any supported layout.
     Synth {
         /// Output directory.
@@ -123,9 +145,26 @@ enum Command {
         /// ground receiver.
         #[arg(long)]
         leo: bool,
-        /// Number of satellites.
-        #[arg(long, default_value_t = 8)]
-        satellites: usize,
+        /// Number of satellites (default 8, or as many as `--cn0` values).
+        #[arg(long)]
+        satellites: Option<usize>,
+        /// C/N0 of each satellite, dB-Hz, up to 60 (comma-separated; instead of the
+        /// `--cn0-min`..`--cn0-max` spread).
+        #[arg(long, value_delimiter = ',')]
+        cn0: Option<Vec<f64>>,
+        /// Signals only, no thermal noise (quantized with the same gain).
+        #[arg(long)]
+        no_noise: bool,
+        /// A continuous-wave interferer: 'offset_hz,jn_db' (offset from the band centre, power
+        /// over the noise power).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        cw: Option<Vec<f64>>,
+        /// A constant offset added: 'i,q' in noise σ (16 LSB in CS8).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        dc: Option<Vec<f64>>,
+        /// Every sample replaced by 'i,q' in noise σ (e.g. '100,100' saturates: CS8 +127).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        constant: Option<Vec<f64>>,
         /// Lowest C/N0, dB-Hz.
         #[arg(long, default_value_t = 40.0)]
         cn0_min: f64,
@@ -265,10 +304,18 @@ fn main() -> ExitCode {
             antennas,
             leo,
             satellites,
+            cn0,
+            no_noise,
+            cw,
+            dc,
+            constant,
             cn0_min,
             cn0_max,
             seed,
         }) => FileFormat::parse(&format).and_then(|format| {
+            let overlays = overlays(cw, dc, constant)?;
+            let cn0 = cn0.unwrap_or_default();
+            let satellites = satellites.unwrap_or(if cn0.is_empty() { 8 } else { cn0.len() });
             synth(
                 &out,
                 &name,
@@ -283,9 +330,19 @@ fn main() -> ExitCode {
                     cn0_min_dbhz: cn0_min,
                     cn0_max_dbhz: cn0_max,
                     seed,
+                    noise: !no_noise,
+                    cn0_dbhz: cn0,
+                    overlays,
                 },
             )
         }),
+        Some(Command::AcquisitionStats {
+            searches,
+            seeds,
+            track_seconds,
+            markdown,
+            json,
+        }) => acquisition_stats(searches, seeds, track_seconds, markdown, json),
         None => run(
             scenarios::DEFAULT_SCENARIO,
             None,
@@ -364,6 +421,66 @@ fn synth(out: &std::path::Path, name: &str, spec: &record::SynthSpec) -> anyhow:
         truth.intermediate_frequency_hz
     );
     Ok(())
+}
+
+fn acquisition_stats(
+    searches: usize,
+    seeds: usize,
+    track_seconds: f64,
+    markdown: Option<PathBuf>,
+    json: bool,
+) -> anyhow::Result<()> {
+    use record::acquisition_stats as stats;
+    anyhow::ensure!(
+        track_seconds.is_finite() && track_seconds >= 1.0,
+        "--track-seconds {track_seconds} must be at least 1"
+    );
+    let report = stats::measure(&stats::StatsOptions {
+        thermal_searches: searches,
+        seeds,
+        track_seconds,
+        work_dir: std::env::temp_dir().join(format!("host-sim-acq-stats-{}", std::process::id())),
+    })?;
+    let text = stats::markdown(&report, &stats::today(), &stats::commit());
+    if let Some(path) = markdown {
+        std::fs::write(&path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print!("{text}");
+    }
+    Ok(())
+}
+
+/// The `--cw`, `--dc` and `--constant` overlays of `synth`.
+fn overlays(
+    cw: Option<Vec<f64>>,
+    dc: Option<Vec<f64>>,
+    constant: Option<Vec<f64>>,
+) -> anyhow::Result<Vec<record::synthesize::Overlay>> {
+    use record::synthesize::Overlay;
+    let pair = |v: &[f64], name: &str| -> anyhow::Result<(f64, f64)> {
+        anyhow::ensure!(
+            v.len() == 2 && v.iter().all(|x| x.is_finite()),
+            "--{name} takes two finite values"
+        );
+        Ok((v[0], v[1]))
+    };
+    let mut out = Vec::new();
+    if let Some(v) = constant {
+        let (i, q) = pair(&v, "constant")?;
+        out.push(Overlay::Constant { i, q });
+    }
+    if let Some(v) = dc {
+        let (i, q) = pair(&v, "dc")?;
+        out.push(Overlay::Dc { i, q });
+    }
+    if let Some(v) = cw {
+        let (offset_hz, jn_db) = pair(&v, "cw")?;
+        out.push(Overlay::Cw { offset_hz, jn_db });
+    }
+    Ok(out)
 }
 
 fn attitude_setup(

@@ -70,6 +70,7 @@ fn every_layout_round_trips_through_acquire_and_track() {
             cn0_min_dbhz: 42.0,
             cn0_max_dbhz: 48.0,
             seed: 100 + k as u64,
+            ..SynthSpec::default()
         };
         let (truth, paths) = synth(&dir, &format!("case{k}"), &spec);
         assert_eq!(
@@ -152,6 +153,7 @@ fn leo_recording_is_acquired_and_tracked() {
         cn0_min_dbhz: 40.0,
         cn0_max_dbhz: 50.0,
         seed: 7,
+        ..SynthSpec::default()
     };
     let (truth, paths) = synth(&dir, "leo", &spec);
     let rec = open(&paths, &truth);
@@ -221,6 +223,7 @@ fn three_antenna_recording_gives_the_attitude() {
             cn0_min_dbhz: 40.0,
             cn0_max_dbhz: 50.0,
             seed: 21,
+            ..SynthSpec::default()
         };
         let (truth, paths) = synth(&dir, layout, &spec);
         let rec = open(&paths, &truth);
@@ -285,6 +288,7 @@ fn satellites_are_reacquired_after_a_blackout() {
         cn0_min_dbhz: 42.0,
         cn0_max_dbhz: 48.0,
         seed: 5,
+        ..SynthSpec::default()
     };
     let (truth, paths) = synth(&dir, "blackout", &spec);
     // Noise of the synthesizer's level (σ = 16 LSB per component) over [2.0, 3.5) s.

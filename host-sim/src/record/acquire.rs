@@ -168,6 +168,17 @@ pub fn acquire(
     rec: &Recording,
     opts: &AcquireOptions,
 ) -> Result<(AcquireReport, Vec<SearchResult>)> {
+    acquire_with_searches(rec, opts).map(|(report, accepted, _)| (report, accepted))
+}
+
+/// [`acquire`], also returning every PRN's search (in the order of [`AcquireOptions::prns`]).
+///
+/// # Errors
+/// As [`acquire`].
+pub fn acquire_with_searches(
+    rec: &Recording,
+    opts: &AcquireOptions,
+) -> Result<(AcquireReport, Vec<SearchResult>, Vec<SearchResult>)> {
     ensure!(
         opts.antenna < rec.antenna_count(),
         "--antenna {} does not exist (the recording has {})",
@@ -236,7 +247,7 @@ pub fn acquire(
         rejected_cross_correlations: rejected,
         search_s,
     };
-    Ok((report, accepted))
+    Ok((report, accepted, results))
 }
 
 /// Detected results split into accepted ones (by PRN) and cross-correlation rejections (see

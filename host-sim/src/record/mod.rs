@@ -5,6 +5,7 @@
 //! * [`format`](mod@format): the `--format` names and byte layouts (single- and multi-channel).
 //! * [`reader`]: validation with clear errors, and streaming block reads (bounded memory).
 //! * [`acquire`](mod@acquire): acquisition over the first milliseconds.
+//! * [`acquisition_stats`]: detection and false alarms measured on every background.
 //! * [`track`](mod@track): acquisition, tracking with re-acquisition, per-satellite reports.
 //! * [`satellite`]: per-satellite state and summaries of `track`, thermal C/N0.
 //! * [`report`]: the human table, CSV and PNG files of `track`.
@@ -14,6 +15,7 @@
 //! * [`synthesize`]: synthesized recordings with their truth.
 
 pub mod acquire;
+pub mod acquisition_stats;
 pub mod attitude;
 pub mod attitude_setup;
 pub mod format;

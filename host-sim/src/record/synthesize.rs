@@ -3,12 +3,16 @@
 //! block, with a truth file (`<name>.truth.json`) and a sky file (`<name>.sky.csv`) beside it.
 //!
 //! Sky: `n` satellites with distinct random PRNs, C/N0 spread evenly over
-//! `[cn0_min, cn0_max]` (in random order), azimuths 45° apart, elevations 12°–78°; lines of
+//! `[cn0_min, cn0_max]` (in random order) or given per satellite (up to
+//! [`MAX_SYNTH_CN0_DBHZ`]), azimuths 45° apart, elevations 12°–78°; lines of
 //! sight in the local NED frame (the attitude's reference frame). Static: Dopplers within
 //! ±4.5 kHz and rates within ±0.8 Hz/s (a ground receiver); LEO: Dopplers within ±40 kHz (the
 //! first two at +38…40 and −38…−40 kHz) and rates within ±60 Hz/s. 50 bit/s data.
 //! Array (three antennas): paper 003's equilateral triangle of 1.5 m, line biases 0, 0.13,
 //! −0.27 cycle, static attitude yaw 30°, pitch 4°, roll −6° (3-2-1, body to NED).
+//! Thermal noise (σ = 1 per component before the front-end gain of [`crate::synth::quantize`])
+//! or none (`noise: false`, `synth --no-noise`): the signals alone, quantized with the same
+//! gain, as signal simulators without a noise model write them.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -22,11 +26,12 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::format::{interleave, FileFormat};
+use super::reader::{Recording, RecordingSpec};
 use crate::scenarios::signal::triangle;
 use crate::synth::file::extension;
 use crate::synth::quantize::encode;
 use crate::synth::scene::SUB_BLOCK;
-use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
+use crate::synth::{AnalogSamples, AttitudeMotion, FrontEnd, Satellite, Scene};
 
 /// Receiver dynamics of a synthesized recording.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,7 +65,108 @@ pub struct SynthSpec {
     pub cn0_max_dbhz: f64,
     /// Seed of the sky, data and noise.
     pub seed: u64,
+    /// Thermal noise added (`false`: the satellites' signals only, quantized with the same
+    /// gain, as signal simulators without a noise model write them).
+    pub noise: bool,
+    /// C/N0 of each satellite, dB-Hz (`satellites` values, in PRN order); empty: spread evenly
+    /// over `[cn0_min_dbhz, cn0_max_dbhz]`.
+    pub cn0_dbhz: Vec<f64>,
+    /// Interference and degenerate inputs applied to every antenna before quantization, in
+    /// order.
+    pub overlays: Vec<Overlay>,
 }
+
+/// Something added to, or put instead of, the synthesized signals before quantization (noise
+/// σ units: the thermal noise has σ = 1 per component, see [`crate::synth::quantize`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Overlay {
+    /// Every sample replaced by a constant, σ units (satellites and noise gone): a huge value
+    /// saturates every layout (CS8 +127), 0 is silence.
+    Constant {
+        /// In-phase value (the real sample of real layouts).
+        i: f64,
+        /// Quadrature value.
+        q: f64,
+    },
+    /// A constant offset added, σ units.
+    Dc {
+        /// In-phase offset.
+        i: f64,
+        /// Quadrature offset.
+        q: f64,
+    },
+    /// A continuous-wave tone `offset_hz` from the band centre (the IF of real layouts), its
+    /// power `jn_db` above the thermal noise power (2σ² complex, σ² real).
+    Cw {
+        /// Offset from the band centre, Hz.
+        offset_hz: f64,
+        /// Tone power over the noise power, dB.
+        jn_db: f64,
+    },
+}
+
+impl Overlay {
+    /// Whether the overlay removes the satellites (a constant input).
+    pub fn replaces_signals(&self) -> bool {
+        matches!(self, Self::Constant { .. })
+    }
+
+    /// Applies the overlay to samples `[first, first + n)` of every antenna.
+    fn apply(&self, analog: &mut [AnalogSamples], first: u64, fe: &FrontEnd) {
+        for a in analog.iter_mut() {
+            let complex = !a.q.is_empty();
+            match *self {
+                Self::Constant { i, q } => {
+                    a.i.fill(i as f32);
+                    a.q.fill(q as f32);
+                }
+                Self::Dc { i, q } => {
+                    a.i.iter_mut().for_each(|x| *x += i as f32);
+                    a.q.iter_mut().for_each(|x| *x += q as f32);
+                }
+                Self::Cw { offset_hz, jn_db } => {
+                    // Complex: |a|² = 2σ² · J/N; real: a²/2 = σ² · J/N.
+                    let amplitude = (2.0 * 10f64.powf(jn_db / 10.0)).sqrt();
+                    let f = fe.intermediate_frequency_hz + offset_hz;
+                    for k in 0..a.i.len() {
+                        let t = (first + k as u64) as f64 / fe.sample_rate_hz;
+                        let phase = std::f64::consts::TAU * (f * t).rem_euclid(1.0);
+                        a.i[k] += (amplitude * phase.cos()) as f32;
+                        if complex {
+                            a.q[k] += (amplitude * phase.sin()) as f32;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl Default for SynthSpec {
+    /// CS8 at 2.6 Msps, 1 s, one antenna, static, 8 satellites at 40–50 dB-Hz with thermal
+    /// noise, seed 1.
+    fn default() -> Self {
+        Self {
+            format: FileFormat::parse("cs8").unwrap_or_else(|_| unreachable!("cs8 is a layout")),
+            sample_rate_hz: 2.6e6,
+            intermediate_frequency_hz: None,
+            seconds: 1.0,
+            antennas: 1,
+            dynamics: Dynamics::Static,
+            satellites: 8,
+            cn0_min_dbhz: 40.0,
+            cn0_max_dbhz: 50.0,
+            seed: 1,
+            noise: true,
+            cn0_dbhz: Vec::new(),
+            overlays: Vec::new(),
+        }
+    }
+}
+
+/// Highest C/N0 a synthesized satellite may have, dB-Hz (CS8 holds twelve satellites at this
+/// level with noise without clipping more than a few samples in a thousand).
+pub const MAX_SYNTH_CN0_DBHZ: f64 = 60.0;
 
 /// One synthesized satellite, as the receiver should find it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -110,6 +216,16 @@ pub struct RecordingTruth {
     pub satellites: Vec<SatelliteTruth>,
     /// Seed.
     pub seed: u64,
+    /// Thermal noise was added (`false`: signals only).
+    #[serde(default = "noise_default")]
+    pub noise: bool,
+    /// Interference and degenerate inputs applied (a constant input leaves no satellites).
+    #[serde(default)]
+    pub overlays: Vec<Overlay>,
+}
+
+fn noise_default() -> bool {
+    true
 }
 
 /// Attitude of the synthesized array, 3-2-1 yaw, pitch, roll, degrees.
@@ -141,6 +257,22 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
         spec.cn0_min_dbhz,
         spec.cn0_max_dbhz
     );
+    ensure!(
+        spec.cn0_dbhz.is_empty() || spec.cn0_dbhz.len() == spec.satellites,
+        "{} C/N0 values for {} satellites",
+        spec.cn0_dbhz.len(),
+        spec.satellites
+    );
+    let levels = spec
+        .cn0_dbhz
+        .iter()
+        .chain([&spec.cn0_min_dbhz, &spec.cn0_max_dbhz]);
+    for &c in levels {
+        ensure!(
+            c.is_finite() && c <= MAX_SYNTH_CN0_DBHZ,
+            "C/N0 {c} dB-Hz: the synthesizer takes finite values up to {MAX_SYNTH_CN0_DBHZ} dB-Hz"
+        );
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut prns: Vec<u8> = (1..=32).collect();
     prns.shuffle(&mut rng);
@@ -158,6 +290,9 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
         })
         .collect();
     cn0.shuffle(&mut rng);
+    if !spec.cn0_dbhz.is_empty() {
+        cn0.clone_from(&spec.cn0_dbhz);
+    }
     let az0: f64 = rng.random_range(0.0..45.0);
     let mut sats = Vec::with_capacity(n);
     for (k, &prn) in prns.iter().enumerate() {
@@ -213,7 +348,7 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
             intermediate_frequency_hz: fif,
             complex,
         },
-        noise_seed: Some(spec.seed ^ 0x7265_636f_7264),
+        noise_seed: spec.noise.then_some(spec.seed ^ 0x7265_636f_7264),
     };
     let truth = scene
         .satellites
@@ -247,6 +382,20 @@ pub fn file_names(name: &str, format: &FileFormat, antennas: usize) -> Vec<Strin
             .map(|a| format!("{name}.ant{a}.{ext}"))
             .collect()
     }
+}
+
+/// Opens a recording [`write_recording`] wrote into `dir`, as the command line would.
+///
+/// # Errors
+/// Those of [`Recording::open`].
+pub fn open_synthesized(dir: &Path, truth: &RecordingTruth) -> Result<Recording> {
+    Recording::open(&RecordingSpec {
+        paths: truth.files.iter().map(|f| dir.join(f)).collect(),
+        format: FileFormat::parse(&truth.format)?,
+        sample_rate_hz: truth.sample_rate_hz,
+        intermediate_frequency_hz: Some(truth.intermediate_frequency_hz),
+        channels: None,
+    })
 }
 
 /// Synthesizes the recording into `dir`, streamed in blocks (memory independent of the
@@ -293,7 +442,10 @@ pub fn write_recording(
     let mut first = 0u64;
     while first < total {
         let n = block.min(total - first) as usize;
-        let analog = scene.synthesize(first, n);
+        let mut analog = scene.synthesize(first, n);
+        for o in &spec.overlays {
+            o.apply(&mut analog, first, &scene.front_end);
+        }
         let streams = encode(format.sample, &analog)?;
         if format.channels > 1 && !format.packed_channels() {
             let one = interleave(&streams, format.channel_bytes());
@@ -309,6 +461,11 @@ pub fn write_recording(
         w.flush()?;
     }
     let r0 = scene.antennas_b[0];
+    let satellites = if spec.overlays.iter().any(Overlay::replaces_signals) {
+        Vec::new()
+    } else {
+        satellites
+    };
     let truth = RecordingTruth {
         format: format.name(),
         files: names,
@@ -336,6 +493,8 @@ pub fn write_recording(
         attitude_ypr_deg: ATTITUDE_YPR_DEG,
         satellites,
         seed: spec.seed,
+        noise: spec.noise,
+        overlays: spec.overlays.clone(),
     };
     let truth_path = dir.join(format!("{name}.truth.json"));
     std::fs::write(&truth_path, serde_json::to_string_pretty(&truth)?)

@@ -21,7 +21,9 @@ use gnss_attitude::signal::SampleBlock;
 use gnss_attitude::tracking::{AcquisitionConfig, Channel, ChannelConfig};
 use serde::Serialize;
 
-use super::acquire::{acquire, split_cross_correlations, AcquireOptions, AcquireReport};
+use super::acquire::{
+    acquire_with_searches, split_cross_correlations, AcquireOptions, AcquireReport,
+};
 use super::attitude::{AttitudeReport, AttitudeSetup, AttitudeSolver};
 use super::reader::{Block, Recording};
 pub use super::satellite::{mai_corrected_cn0, Row, SatTrack, SatelliteReport};
@@ -53,6 +55,9 @@ pub struct TrackOptions {
     pub reacquire: bool,
     /// Attitude from a three-antenna recording (`None`: no attitude).
     pub attitude: Option<AttitudeSetup>,
+    /// PRNs handed over at their search peak even when not detected (a test of the lock
+    /// detectors on phantoms; empty for normal use).
+    pub force_hand_over: Vec<u8>,
 }
 
 impl Default for TrackOptions {
@@ -63,6 +68,7 @@ impl Default for TrackOptions {
             block: 1 << 16,
             reacquire: true,
             attitude: None,
+            force_hand_over: Vec::new(),
         }
     }
 }
@@ -143,7 +149,13 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
     if let Some(s) = opts.seconds {
         ensure!(s.is_finite() && s > 0.0, "--seconds {s} must be positive");
     }
-    let (acq_report, found) = acquire(rec, &opts.acquire)?;
+    let (acq_report, mut found, searches) = acquire_with_searches(rec, &opts.acquire)?;
+    for s in &searches {
+        let forced = opts.force_hand_over.contains(&s.prn.number());
+        if forced && !found.iter().any(|f| f.prn == s.prn) {
+            found.push(*s);
+        }
+    }
     ensure!(
         !found.is_empty(),
         "no satellite found in the first {} ms (threshold {:.2}): check --fs, --if, --format and the Doppler range",
