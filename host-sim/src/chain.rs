@@ -8,8 +8,10 @@
 
 use anyhow::{Context, Result};
 use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
+use gnss_attitude::tracking::acquisition::CROSS_CORRELATION_MARGIN;
 use gnss_attitude::tracking::{
-    Acquisition, AcquisitionConfig, Channel, ChannelConfig, SearchResult, TrackingEpoch,
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, CrossCheck, KnownSignal, SearchReport,
+    SearchResult, TrackingEpoch,
 };
 use rayon::prelude::*;
 
@@ -135,17 +137,21 @@ impl Tracker {
         let acq_samples = samples(params, 0, n_acq)?;
         let complex = params.format.is_complex();
         let q = complex.then_some(&acq_samples.q[0][..]);
-        let searches = search_prns(
+        let found = detect_prns(
             &acq_samples.i[0],
             q,
             0,
             &params.search_prns,
             &params.acquisition,
+            &[],
+            Some(CROSS_CORRELATION_MARGIN),
         )?;
+        let searches: Vec<SearchResult> = found.reports.iter().map(|r| r.result).collect();
         let acquisition_seconds = started.elapsed().as_secs_f64();
         let mut false_detections = Vec::new();
         let mut channels = Vec::new();
-        for s in searches.iter().filter(|s| s.detected) {
+        let accepted = |s: &&SearchResult| found.accepted.iter().any(|a| a.prn == s.prn);
+        for s in searches.iter().filter(accepted) {
             match params
                 .scene
                 .satellites
@@ -282,16 +288,104 @@ pub fn search_prns(
     prns: &[u8],
     config: &AcquisitionConfig,
 ) -> Result<Vec<SearchResult>> {
+    Ok(search_reports(i, q, first_sample, prns, config)?
+        .into_iter()
+        .map(|r| r.result)
+        .collect())
+}
+
+/// [`search_prns`] with the core's full reports (background, verification).
+///
+/// # Errors
+/// As [`search_prns`].
+pub fn search_reports(
+    i: &[i8],
+    q: Option<&[i8]>,
+    first_sample: u64,
+    prns: &[u8],
+    config: &AcquisitionConfig,
+) -> Result<Vec<SearchReport>> {
     prns.par_iter()
         .map_init(
             || Acquisition::<2048>::new().map(Box::new),
-            |engine, &p| -> Result<SearchResult> {
+            |engine, &p| -> Result<SearchReport> {
                 let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
                 let prn = Prn::new(p).with_context(|| format!("PRN {p} out of range 1-32"))?;
-                Ok(engine.search(prn, i, q, first_sample, config)?)
+                Ok(engine.search_report(prn, i, q, first_sample, config)?)
             },
         )
         .collect()
+}
+
+/// A detection rejected as the cross-correlation of a stronger satellite.
+#[derive(Clone, Copy, Debug)]
+pub struct CrossCorrelationRejection {
+    /// The detection.
+    pub result: SearchResult,
+    /// The core's test.
+    pub check: CrossCheck,
+}
+
+/// The detections of one search round.
+#[derive(Clone, Debug)]
+pub struct Detections {
+    /// Every PRN's search, in the order searched.
+    pub reports: Vec<SearchReport>,
+    /// Detected, verified and not explained as a cross-correlation; by PRN.
+    pub accepted: Vec<SearchResult>,
+    /// Detected and verified, but the cross-correlation of stronger satellites.
+    pub rejected: Vec<CrossCorrelationRejection>,
+}
+
+/// Searches `prns` ([`search_reports`]), then tests the verified detections, strongest first,
+/// against the cross-correlation of the stronger accepted ones and of `tracked` (signals
+/// known on these samples, e.g. the channels') with the core's
+/// [`Acquisition::cross_check`]; `margin` is its margin (`None`: no test).
+///
+/// # Errors
+/// As [`search_prns`].
+pub fn detect_prns(
+    i: &[i8],
+    q: Option<&[i8]>,
+    first_sample: u64,
+    prns: &[u8],
+    config: &AcquisitionConfig,
+    tracked: &[KnownSignal],
+    margin: Option<f32>,
+) -> Result<Detections> {
+    let reports = search_reports(i, q, first_sample, prns, config)?;
+    let mut detected: Vec<SearchResult> = reports
+        .iter()
+        .map(|r| r.result)
+        .filter(|r| r.detected)
+        .collect();
+    detected.sort_by(|a, b| b.metric.total_cmp(&a.metric));
+    let mut engine = Box::new(Acquisition::<2048>::new().map_err(|e| anyhow::anyhow!("{e}"))?);
+    let mut accepted: Vec<SearchResult> = Vec::new();
+    let mut rejected = Vec::new();
+    for r in detected {
+        let Some(margin) = margin else {
+            accepted.push(r);
+            continue;
+        };
+        let known: Vec<KnownSignal> = tracked
+            .iter()
+            .copied()
+            .chain(accepted.iter().map(KnownSignal::from))
+            .collect();
+        let check = engine.cross_check(&r, &known, i, q, config, margin)?;
+        if check.explained {
+            rejected.push(CrossCorrelationRejection { result: r, check });
+        } else {
+            accepted.push(r);
+        }
+    }
+    accepted.sort_by_key(|r| r.prn.number());
+    Ok(Detections {
+        reports,
+        accepted,
+        rejected,
+    })
 }
 
 /// Runs every active channel over `block` (in parallel over channels) and hands each complete

@@ -232,8 +232,10 @@ struct SearchArgs {
     /// Antenna searched.
     #[arg(long, default_value_t = 0)]
     antenna: usize,
-    /// Margin of the cross-correlation test, dB (0 switches it off).
-    #[arg(long, default_value_t = 15.0)]
+    /// Margin of the cross-correlation test, dB: a detection at most this much above the
+    /// cross-correlation the stronger satellites predict at it is rejected (0 switches the
+    /// test off).
+    #[arg(long, default_value_t = 3.0)]
     xcorr_margin_db: f64,
 }
 

@@ -24,8 +24,10 @@ use heapless::Vec;
 use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
 use crate::attitude::one_stage::{AdapterConfig, EpochClock, ObservationAdapter};
 use crate::signal::{Prn, SampleBlock};
+use crate::tracking::acquisition::CROSS_CORRELATION_MARGIN;
+use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
-    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, SearchResult,
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal, SearchResult,
 };
 use crate::{OneStageError, ReceiverError};
 
@@ -101,8 +103,11 @@ pub struct SampleReport {
     pub without_aiding: u32,
     /// Observations refused because their epoch was already closed (should stay 0).
     pub late: u32,
-    /// Channels closed for lack of lock.
+    /// Channels closed (for lack of lock, or as cross-correlations).
     pub released: u8,
+    /// Of those, channels that released themselves as another satellite's
+    /// cross-correlation.
+    pub cross_correlations: u8,
 }
 
 /// The receiver from raw samples: acquisition engine (`N`-point FFT), up to `S` channels,
@@ -178,9 +183,12 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     }
 
     /// Searches `prn` in the reference antenna's samples `i` (and `q` for complex samples)
-    /// whose first sample is receiver sample `first_sample`; a detection starts a channel
-    /// that tracks from the first sample of the next [`Self::push_samples`] block. Searching
-    /// a PRN that already has a channel only reports.
+    /// whose first sample is receiver sample `first_sample`
+    /// ([`AcquisitionConfig::samples_needed`] of them: the search and its verification
+    /// dwell); a detection that the channels' satellites do not explain as their
+    /// cross-correlation ([`Acquisition::cross_check`]; `detected` is then false) starts a
+    /// channel that tracks from the first sample of the next [`Self::push_samples`] block.
+    /// Searching a PRN that already has a channel only reports.
     ///
     /// # Errors
     /// [`ReceiverError::Acquisition`] for samples or a configuration the search refuses;
@@ -193,9 +201,32 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         q: Option<&[i8]>,
         first_sample: u64,
     ) -> Result<SearchResult, ReceiverError> {
-        let result = self
-            .acquisition
-            .search(prn, i, q, first_sample, &self.config.acquisition)?;
+        let config = self.config.acquisition;
+        let mut result = self.acquisition.search(prn, i, q, first_sample, &config)?;
+        if result.detected && !self.tracks(prn) {
+            // Not a satellite when the channels' satellites explain it as their
+            // cross-correlation.
+            let mut known: Vec<KnownSignal, S> = Vec::new();
+            for k in self
+                .channels
+                .iter()
+                .filter_map(|(c, _)| c.known_signal_at(first_sample))
+            {
+                // One entry per channel: at most S, the capacity.
+                if known.push(k).is_err() {
+                    break;
+                }
+            }
+            let check = self.acquisition.cross_check(
+                &result,
+                &known,
+                i,
+                q,
+                &config,
+                CROSS_CORRELATION_MARGIN,
+            )?;
+            result.detected = !check.explained;
+        }
         if result.detected && !self.tracks(prn) {
             self.start(&result)?;
         }
@@ -292,12 +323,34 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         }
         let now = block.first_sample().saturating_add(block.len() as u64);
         self.frontier = Some(now);
+        let phantoms = self.check_cross_correlations();
         let limit = self.config.release_after_samples;
         let before = self.channels.len();
-        self.channels
-            .retain(|(_, s)| now.saturating_sub(s.last_lock_sample) < limit);
+        self.channels.retain(|(c, s)| {
+            now.saturating_sub(s.last_lock_sample) < limit && !c.is_cross_correlation()
+        });
         report.released = before.saturating_sub(self.channels.len()) as u8;
+        report.cross_correlations = phantoms;
         Ok(report)
+    }
+
+    /// Every channel's cross-correlation check against the others
+    /// ([`Channel::check_cross_correlation`]); returns how many released themselves.
+    fn check_cross_correlations(&mut self) -> u8 {
+        let mut probes: Vec<SignalProbe, S> = Vec::new();
+        for p in self.channels.iter().filter_map(|(c, _)| c.probe()) {
+            // One probe per channel: at most S, the capacity.
+            if probes.push(p).is_err() {
+                break;
+            }
+        }
+        let mut released = 0u8;
+        for (channel, _) in self.channels.iter_mut() {
+            if channel.check_cross_correlation(&probes).is_some() {
+                released = released.saturating_add(1);
+            }
+        }
+        released
     }
 }
 

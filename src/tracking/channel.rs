@@ -21,19 +21,33 @@
 //!    assist and DLL wide).
 //! 3. **Tracking**: FLL assist and DLL narrow (by default a pure PLL).
 //!
-//! Lock windows (100 ms) drive the lock detector; C/N0 is reported from longer windows (1 s).
+//! Lock windows (100 ms) drive the lock detector (C/N0, phase-lock indicator and correlation
+//! shape, with hysteresis: see [`super::lock::LockDetector`]); C/N0 is reported from longer
+//! windows (1 s), from the lock windows until the first of those ([`Channel::cn0_estimate`]
+//! says which, and whether the noise estimate hit the quantization floor).
+//!
+//! # Cross-correlation
+//! A channel handed a strong satellite's cross-correlation (a false detection) tracks it as it
+//! would a signal. Its supervisor, which has all channels, passes the other channels'
+//! [`Channel::probe`]s to [`Channel::check_cross_correlation`] after each block: a channel
+//! whose prompt power the stronger channels' cross-correlation explains (at their code lags
+//! and Doppler offsets, [`super::xcorr`]) for
+//! [`ChannelConfig::cross_correlation_windows`] lock windows in a row releases itself before
+//! its lock detector (which needs [`ChannelConfig::lock_windows_to_declare`] good windows)
+//! declares a lock.
 
-use super::acquisition::SearchResult;
-use super::cn0::PowerWindow;
+use super::acquisition::{KnownSignal, SearchResult};
+use super::cn0::{PowerWindow, WindowEstimate};
 pub use super::config::ChannelConfig;
 use super::lock::{BitSync, LockDetector};
 use super::loops::{costas_cycles, dll_chips, dll_correction, fll_hz, CarrierLoop};
 pub use super::refine::{
     refine_frequency, refine_frequency_and_rate, REFINEMENT_EPOCHS, REFINEMENT_RANGE_HZ,
 };
+use super::xcorr::{cross_correlation_source, CrossCorrelationTest, SignalProbe};
 use crate::error::TrackingError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
-use crate::signal::correlator::{Correlator, EpochCorrelations, Iq};
+use crate::signal::correlator::{Correlator, EpochCorrelations, Iq, Taps};
 use crate::signal::SampleBlock;
 
 /// Where a channel is in its life.
@@ -91,6 +105,38 @@ pub struct TrackingEpoch<const A: usize> {
     pub data_bit: Option<i8>,
 }
 
+/// The channel's C/N0 estimate and what it rests on.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Cn0Estimate {
+    /// C/N0, dB-Hz (0 before the first window).
+    pub cn0_dbhz: f32,
+    /// Seconds of samples the estimate rests on (a lock window before the first long window).
+    pub window_s: f32,
+    /// From a long (C/N0) window rather than a short lock window.
+    pub long_window: bool,
+    /// The noise tap read less than the samples' quantization allows: the floor was used (a
+    /// noise-free recording; the C/N0 is then the signal over the quantization noise).
+    pub quantization_limited: bool,
+}
+
+/// Cross-correlation bookkeeping of a channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+struct CrossCorrelationWatch {
+    /// Lock windows completed since the hand-over.
+    windows: u32,
+    /// The last completed lock window's estimate.
+    last: Option<WindowEstimate>,
+    /// Window last judged by [`Channel::check_cross_correlation`].
+    judged: u32,
+    /// Windows in a row explained as a cross-correlation.
+    explained: u8,
+}
+
+/// Doppler uncertainty of a tracking channel for the cross-correlation test, Hz.
+const TRACKING_DOPPLER_TOLERANCE_HZ: f32 = 25.0;
+
 /// One satellite's channel.
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -107,10 +153,25 @@ pub struct Channel<const A: usize> {
     lock: LockDetector,
     bit_sync: BitSync,
     bit_sum: i64,
-    cn0_dbhz: f32,
-    long_estimate: bool,
+    cn0: Cn0Estimate,
     acquired_doppler: f32,
     squares: [[f32; 2]; REFINEMENT_EPOCHS],
+    /// Receiver sample the correlator processes next.
+    next_sample: u64,
+    /// The blocks carry complex samples.
+    complex: bool,
+    watch: CrossCorrelationWatch,
+}
+
+/// The discriminator outputs of one epoch (reference antenna).
+#[derive(Clone, Copy, Debug)]
+struct Discriminators {
+    /// Costas phase error, cycles.
+    phase: f32,
+    /// FLL frequency error, Hz.
+    frequency: f32,
+    /// DLL code error, chips.
+    code: f32,
 }
 
 impl<const A: usize> Channel<A> {
@@ -132,13 +193,15 @@ impl<const A: usize> Channel<A> {
             previous_prompt: None,
             lock_window: PowerWindow::default(),
             cn0_window: PowerWindow::default(),
-            lock: LockDetector::new(config.cn0_lock_threshold_dbhz, config.pld_threshold, 3),
+            lock: LockDetector::new(&config.lock_thresholds()),
             bit_sync: BitSync::default(),
             bit_sum: 0,
-            cn0_dbhz: 0.0,
-            long_estimate: false,
+            cn0: Cn0Estimate::default(),
             acquired_doppler: 0.0,
             squares: [[0.0; 2]; REFINEMENT_EPOCHS],
+            next_sample: 0,
+            complex: true,
+            watch: CrossCorrelationWatch::default(),
         })
     }
 
@@ -155,6 +218,17 @@ impl<const A: usize> Channel<A> {
     /// The correlator (NCO state).
     pub fn correlator(&self) -> &Correlator<A> {
         &self.correlator
+    }
+
+    /// The C/N0 estimate with what it rests on.
+    pub fn cn0_estimate(&self) -> Cn0Estimate {
+        self.cn0
+    }
+
+    /// Whether the channel released itself as another satellite's cross-correlation (it
+    /// reports no lock until the next hand-over).
+    pub fn is_cross_correlation(&self) -> bool {
+        self.lock.held()
     }
 
     /// Hands over an acquisition: tracking starts at the first sample of the next block given
@@ -199,7 +273,10 @@ impl<const A: usize> Channel<A> {
             self.hand_over(&acq, now)?;
             self.pending = None;
         }
-        let Some(c) = self.correlator.run(block, cursor)? else {
+        self.complex = block.is_complex();
+        let run = self.correlator.run(block, cursor);
+        self.next_sample = block.first_sample().wrapping_add(*cursor as u64);
+        let Some(c) = run? else {
             return Ok(None);
         };
         if !c.complete {
@@ -233,133 +310,155 @@ impl<const A: usize> Channel<A> {
         self.lock.reset();
         self.bit_sync.reset();
         self.bit_sum = 0;
-        self.long_estimate = false;
+        self.cn0 = Cn0Estimate::default();
+        self.next_sample = now;
+        self.watch = CrossCorrelationWatch::default();
         Ok(())
     }
 
-    /// The loops at the end of a complete code period (reference antenna = index 0).
+    /// The loops at the end of a complete code period (reference antenna = index 0): the
+    /// discriminators, the loop filters steering the NCOs, the lock and C/N0 windows, the
+    /// state, the data bit.
     fn close_loops(&mut self, c: EpochCorrelations<A>) -> TrackingEpoch<A> {
-        let cfg = self.config;
-        let t = c.samples as f32 / cfg.sample_rate_hz as f32;
+        let t = c.samples as f32 / self.config.sample_rate_hz as f32;
         let doppler_now = self.carrier_frequency_hz();
         let reference = c.taps.first().copied().unwrap_or_default();
         let p = reference.prompt;
-        let refining = self.state == ChannelState::Refining;
+        let d = self.discriminators(&reference, t);
         let since = (self.index as usize).saturating_sub(REFINEMENT_EPOCHS) as u32;
-        let pulling = refining || since < cfg.pull_in_ms;
-        // Discriminators.
-        let phase_err = costas_cycles(&p);
-        let freq_err = self
-            .previous_prompt
-            .map_or(0.0, |prev| fll_hz(&prev, &p, t));
-        let offset = self.correlator.early_late_offset_samples() as f32
-            * (CA_CHIP_RATE_HZ / cfg.sample_rate_hz) as f32;
-        let code_err = dll_chips(&reference.early, &reference.late, offset);
-        // Loop filters → NCOs for the next period.
-        let fll_bw = if pulling {
-            cfg.fll_pull_in_bandwidth_hz
-        } else {
-            cfg.fll_bandwidth_hz
-        };
-        let dll_bw = if pulling {
-            cfg.dll_pull_in_bandwidth_hz
-        } else {
-            cfg.dll_bandwidth_hz
-        };
-        let doppler = if refining {
-            // Carrier loop open: keep the acquired Doppler, store the prompt's square.
-            let (i, q) = (p.i as f32 / 65_536.0, p.q as f32 / 65_536.0);
-            if let Some(z) = self.squares.get_mut(self.index as usize) {
-                *z = [i * i - q * q, 2.0 * i * q];
-            }
-            if self.index as usize + 1 >= REFINEMENT_EPOCHS {
-                // Residual at the window's centre (epoch (n − 1)/2) and rate; the next epoch is
-                // n − (n − 1)/2 epochs after the centre.
-                let (delta, rate) =
-                    refine_frequency_and_rate(&self.squares, t, cfg.max_doppler_rate_hz_s);
-                let ahead = 0.5 * (REFINEMENT_EPOCHS as f32 + 1.0) * t;
-                self.carrier =
-                    CarrierLoop::with_rate(self.acquired_doppler + delta + rate * ahead, rate);
-                self.state = ChannelState::PullIn;
-                self.carrier.frequency_hz()
-            } else {
-                self.acquired_doppler
-            }
-        } else {
-            self.carrier
-                .update(phase_err, freq_err, t, cfg.pll_bandwidth_hz, fll_bw)
-        };
-        let code_rate = CA_CHIP_RATE_HZ * (1.0 + f64::from(doppler) / GPS_L1_HZ)
-            + f64::from(dll_correction(code_err, dll_bw));
-        let steered = self
-            .correlator
-            .set_carrier_frequency(cfg.intermediate_frequency_hz + f64::from(doppler))
-            .and_then(|()| self.correlator.set_code_rate(code_rate));
+        let pulling = self.state == ChannelState::Refining || since < self.config.pull_in_ms;
+        let steered = self.steer(&p, &d, t, pulling);
         self.previous_prompt = Some(p);
-        // Lock and C/N0 windows.
-        self.lock_window.add(&p, &reference.noise);
-        self.cn0_window.add(&p, &reference.noise);
-        if self.lock_window.count() >= u32::from(cfg.lock_window) {
-            if let Some(e) = self.lock_window.finish(t) {
-                self.lock.update(e.cn0_dbhz, e.phase_lock_indicator);
-                if !self.long_estimate {
-                    self.cn0_dbhz = e.cn0_dbhz;
-                }
-            }
-        }
-        if self.cn0_window.count() >= u32::from(cfg.cn0_window) {
-            if let Some(e) = self.cn0_window.finish(t) {
-                self.cn0_dbhz = e.cn0_dbhz;
-                self.long_estimate = true;
-            }
-        }
-        // State.
-        if steered.is_err() {
-            self.lock.reset();
-            self.state = ChannelState::Lost;
-        } else {
-            self.state = match self.state {
-                ChannelState::PullIn if !pulling && self.lock.phase_lock() => {
-                    ChannelState::Tracking
-                }
-                ChannelState::Tracking if !self.lock.code_lock() => ChannelState::Lost,
-                s => s,
-            };
-        }
-        // Bit sync and data bits (phase-locked only: the sign of I is the bit's).
-        let _ = refining;
-        let mut data_bit = None;
-        if self.lock.phase_lock() {
-            self.bit_sync.add(self.index, p.i);
-            if let Some(edge) = self.bit_sync.edge() {
-                let position = (self.index + 20 - u32::from(edge)) % 20;
-                if position == 0 {
-                    self.bit_sum = 0;
-                }
-                self.bit_sum += i64::from(p.i);
-                if position == 19 {
-                    data_bit = Some(if self.bit_sum >= 0 { 1 } else { -1 });
-                }
-            }
-        }
+        self.update_windows(&reference, c.samples, t);
+        self.update_state(steered, pulling);
+        let data_bit = self.data_bit(p.i);
         let out = TrackingEpoch {
             prn: self.prn(),
             index: self.index,
             correlations: c,
             doppler_hz: doppler_now,
-            cn0_dbhz: self.cn0_dbhz,
+            cn0_dbhz: self.cn0.cn0_dbhz,
             lock: LockFlags {
                 code: self.lock.code_lock(),
                 phase: self.lock.phase_lock(),
                 bit_sync: self.bit_sync.edge().is_some(),
             },
             state: self.state,
-            phase_error_cycles: phase_err,
-            code_error_chips: code_err,
+            phase_error_cycles: d.phase,
+            code_error_chips: d.code,
             data_bit,
         };
         self.index = self.index.saturating_add(1);
         out
+    }
+
+    /// Costas, FLL and DLL discriminators of the reference antenna's taps.
+    fn discriminators(&self, reference: &Taps, t: f32) -> Discriminators {
+        let p = reference.prompt;
+        let offset = self.correlator.early_late_offset_samples() as f32
+            * (CA_CHIP_RATE_HZ / self.config.sample_rate_hz) as f32;
+        Discriminators {
+            phase: costas_cycles(&p),
+            frequency: self
+                .previous_prompt
+                .map_or(0.0, |prev| fll_hz(&prev, &p, t)),
+            code: dll_chips(&reference.early, &reference.late, offset),
+        }
+    }
+
+    /// Loop filters → NCOs for the next period (during the refinement the carrier loop stays
+    /// open). `false` when the correlator refused a setting.
+    fn steer(&mut self, p: &Iq, d: &Discriminators, t: f32, pulling: bool) -> bool {
+        let cfg = self.config;
+        let (fll_bw, dll_bw) = if pulling {
+            (cfg.fll_pull_in_bandwidth_hz, cfg.dll_pull_in_bandwidth_hz)
+        } else {
+            (cfg.fll_bandwidth_hz, cfg.dll_bandwidth_hz)
+        };
+        let doppler = if self.state == ChannelState::Refining {
+            self.refinement_step(p, t)
+        } else {
+            self.carrier
+                .update(d.phase, d.frequency, t, cfg.pll_bandwidth_hz, fll_bw)
+        };
+        let code_rate = CA_CHIP_RATE_HZ * (1.0 + f64::from(doppler) / GPS_L1_HZ)
+            + f64::from(dll_correction(d.code, dll_bw));
+        self.correlator
+            .set_carrier_frequency(cfg.intermediate_frequency_hz + f64::from(doppler))
+            .and_then(|()| self.correlator.set_code_rate(code_rate))
+            .is_ok()
+    }
+
+    /// One epoch of the refinement stage: stores the prompt's square; at the last one, the
+    /// residual Doppler and rate start the carrier loop. Returns the Doppler to steer to.
+    fn refinement_step(&mut self, p: &Iq, t: f32) -> f32 {
+        let (i, q) = (p.i as f32 * PROMPT_SCALE, p.q as f32 * PROMPT_SCALE);
+        if let Some(z) = self.squares.get_mut(self.index as usize) {
+            *z = [i * i - q * q, 2.0 * i * q];
+        }
+        if (self.index as usize) + 1 < REFINEMENT_EPOCHS {
+            return self.acquired_doppler;
+        }
+        // Residual at the window's centre (epoch (n − 1)/2) and rate; the next epoch is
+        // n − (n − 1)/2 epochs after the centre.
+        let (delta, rate) =
+            refine_frequency_and_rate(&self.squares, t, self.config.max_doppler_rate_hz_s);
+        let ahead = 0.5 * (REFINEMENT_EPOCHS as f32 + 1.0) * t;
+        self.carrier = CarrierLoop::with_rate(self.acquired_doppler + delta + rate * ahead, rate);
+        self.state = ChannelState::PullIn;
+        self.carrier.frequency_hz()
+    }
+
+    /// Adds the epoch to the lock and C/N0 windows; a completed lock window updates the lock
+    /// detector (and the C/N0 until the first long window).
+    fn update_windows(&mut self, reference: &Taps, samples: u32, t: f32) {
+        let cfg = self.config;
+        self.lock_window.add(reference, samples, self.complex);
+        self.cn0_window.add(reference, samples, self.complex);
+        if self.lock_window.count() >= u32::from(cfg.lock_window) {
+            if let Some(e) = self.lock_window.finish(t) {
+                self.lock.update(&e);
+                self.watch.windows = self.watch.windows.saturating_add(1);
+                self.watch.last = Some(e);
+                if !self.cn0.long_window {
+                    self.cn0 = cn0_of(&e, t, false);
+                }
+            }
+        }
+        if self.cn0_window.count() >= u32::from(cfg.cn0_window) {
+            if let Some(e) = self.cn0_window.finish(t) {
+                self.cn0 = cn0_of(&e, t, true);
+            }
+        }
+    }
+
+    /// The state after the epoch (`steered`: the NCOs took the loops' settings).
+    fn update_state(&mut self, steered: bool, pulling: bool) {
+        if !steered {
+            self.lock.reset();
+            self.state = ChannelState::Lost;
+            return;
+        }
+        self.state = match self.state {
+            ChannelState::PullIn if !pulling && self.lock.phase_lock() => ChannelState::Tracking,
+            ChannelState::Tracking if !self.lock.code_lock() => ChannelState::Lost,
+            s => s,
+        };
+    }
+
+    /// Bit sync and data bits (phase-locked only: the sign of I is the bit's).
+    fn data_bit(&mut self, prompt_i: i32) -> Option<i8> {
+        if !self.lock.phase_lock() {
+            return None;
+        }
+        self.bit_sync.add(self.index, prompt_i);
+        let edge = self.bit_sync.edge()?;
+        let position = (self.index + EPOCHS_PER_BIT - u32::from(edge)) % EPOCHS_PER_BIT;
+        if position == 0 {
+            self.bit_sum = 0;
+        }
+        self.bit_sum += i64::from(prompt_i);
+        (position == EPOCHS_PER_BIT - 1).then_some(if self.bit_sum >= 0 { 1 } else { -1 })
     }
 
     /// The replica's current Doppler (carrier NCO frequency minus IF), Hz.
@@ -370,5 +469,88 @@ impl<const A: usize> Channel<A> {
             .carrier()
             .frequency_hz(self.config.sample_rate_hz)
             - self.config.intermediate_frequency_hz) as f32
+    }
+
+    /// The channel as the cross-correlation test sees it: code phase and rate at the next
+    /// sample, Doppler, and the prompt's signal power over the last lock window (2⁻²⁰ units:
+    /// the same for every channel on the same samples). `None` before the first window.
+    pub fn probe(&self) -> Option<SignalProbe> {
+        let e = self.watch.last?;
+        if self.state == ChannelState::Idle {
+            return None;
+        }
+        let code = self.correlator.code();
+        Some(SignalProbe {
+            prn: self.prn(),
+            sample: self.next_sample,
+            code_phase_chips: code.phase_chips(),
+            code_chips_per_sample: code.step as f64 / 4_294_967_296.0,
+            doppler_hz: self.carrier_frequency_hz(),
+            power: e.signal_power,
+        })
+    }
+
+    /// The satellite as a known signal for a search whose first sample is `sample` (code
+    /// phase extrapolated at the current code rate), while the channel has code lock.
+    pub fn known_signal_at(&self, sample: u64) -> Option<KnownSignal> {
+        let probe = self.probe()?;
+        self.lock.code_lock().then(|| KnownSignal {
+            prn: probe.prn,
+            doppler_hz: probe.doppler_hz,
+            code_phase_chips: probe.code_phase_at(sample),
+        })
+    }
+
+    /// Tests the channel's last lock window against the cross-correlation of the stronger
+    /// `others` (the other channels' [`Channel::probe`]s on the same samples;
+    /// [`crate::tracking::xcorr`]). Once
+    /// [`ChannelConfig::cross_correlation_windows`] windows in a row are explained, the
+    /// channel releases itself: state [`ChannelState::Lost`], no lock until the next hand-over;
+    /// returns the strongest source then. Each window is judged once.
+    pub fn check_cross_correlation(&mut self, others: &[SignalProbe]) -> Option<Prn> {
+        let me = self.probe()?;
+        if self.watch.windows == self.watch.judged || self.lock.held() {
+            return None;
+        }
+        self.watch.judged = self.watch.windows;
+        let epoch_s = 1e-3 * f32::from(self.config.lock_window);
+        let test = CrossCorrelationTest {
+            epoch_aligned: true,
+            doppler_tolerance_hz: TRACKING_DOPPLER_TOLERANCE_HZ,
+            coherence_hz: 1.0 / epoch_s,
+            margin: self.config.cross_correlation_margin,
+        };
+        let verdict = cross_correlation_source(&me, others, &test);
+        self.watch.explained = if verdict.explained {
+            self.watch.explained.saturating_add(1)
+        } else {
+            0
+        };
+        if self.watch.explained < self.config.cross_correlation_windows {
+            return None;
+        }
+        info!(
+            "channel: PRN {=u8} released as a cross-correlation",
+            self.prn().number()
+        );
+        self.lock.hold();
+        self.state = ChannelState::Lost;
+        verdict.strongest_source
+    }
+}
+
+/// Scale of the prompts in the refinement's squares.
+const PROMPT_SCALE: f32 = 1.0 / 65_536.0;
+
+/// Code epochs per navigation data bit.
+const EPOCHS_PER_BIT: u32 = 20;
+
+/// The C/N0 estimate of a finished window of epochs of `t` seconds.
+fn cn0_of(e: &WindowEstimate, t: f32, long_window: bool) -> Cn0Estimate {
+    Cn0Estimate {
+        cn0_dbhz: e.cn0_dbhz,
+        window_s: e.epochs as f32 * t,
+        long_window,
+        quantization_limited: e.quantization_limited,
     }
 }

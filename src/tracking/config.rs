@@ -1,5 +1,6 @@
 //! Configuration of a tracking channel.
 
+use super::lock::LockThresholds;
 use crate::error::TrackingError;
 use crate::signal::correlator::{CorrelatorConfig, SlaveTaps};
 
@@ -35,6 +36,21 @@ pub struct ChannelConfig {
     pub cn0_lock_threshold_dbhz: f32,
     /// Phase-lock indicator threshold (≈ cos 2Δφ).
     pub pld_threshold: f32,
+    /// Largest correlation shape (early/late over prompt signal power) of a good lock window
+    /// (midway between a correlation peak's `(1 − d)²` and a flat correlation's 1).
+    pub max_correlation_shape: f32,
+    /// Good lock windows in a row that declare the code lock (the phase lock follows at the
+    /// first good phase window after it).
+    pub lock_windows_to_declare: u8,
+    /// Bad lock windows in a row that lose it.
+    pub lock_windows_to_lose: u8,
+    /// A channel is another satellite's cross-correlation when its prompt power is at most
+    /// this times the predicted cross-correlation of the stronger channels
+    /// ([`crate::tracking::Channel::check_cross_correlation`]).
+    pub cross_correlation_margin: f32,
+    /// Lock windows in a row explained as a cross-correlation before the channel releases
+    /// itself.
+    pub cross_correlation_windows: u8,
     /// Largest Doppler rate the frequency refinement estimates, Hz/s (0: no rate estimate, the
     /// loop starts with rate 0, as suits a ground receiver). Receivers in low Earth orbit see
     /// up to about ±60 Hz/s on GPS L1; see [`ChannelConfig::leo`].
@@ -43,8 +59,11 @@ pub struct ChannelConfig {
 
 impl ChannelConfig {
     /// The defaults for a front end: 0.5 chip offset, 15 Hz PLL, FLL assist 2 Hz for 300 ms
-    /// of pull-in then off (pure PLL), DLL 2 Hz then 0.5 Hz, 100 ms lock windows, 1 s C/N0 windows, code lock
-    /// above 26 dB-Hz, phase lock above cos 2Δφ = 0.5.
+    /// of pull-in then off (pure PLL), DLL 2 Hz then 0.5 Hz, 100 ms lock windows, 1 s C/N0
+    /// windows, code lock above 26 dB-Hz with a correlation peak (shape ≤ 0.625), phase lock
+    /// above cos 2Δφ = 0.5, code lock declared after 2 good windows (200 ms), both lost after
+    /// 3 bad ones;
+    /// a channel explained as a cross-correlation (within 3 dB) in 2 windows releases itself.
     pub fn new(sample_rate_hz: f64, intermediate_frequency_hz: f64) -> Self {
         Self {
             sample_rate_hz,
@@ -61,6 +80,11 @@ impl ChannelConfig {
             cn0_window: 1000,
             cn0_lock_threshold_dbhz: 26.0,
             pld_threshold: 0.5,
+            max_correlation_shape: 0.625,
+            lock_windows_to_declare: 2,
+            lock_windows_to_lose: 3,
+            cross_correlation_margin: 2.0,
+            cross_correlation_windows: 2,
             max_doppler_rate_hz_s: 0.0,
         }
     }
@@ -72,6 +96,16 @@ impl ChannelConfig {
         Self {
             max_doppler_rate_hz_s: 150.0,
             ..Self::new(sample_rate_hz, intermediate_frequency_hz)
+        }
+    }
+
+    pub(crate) fn lock_thresholds(&self) -> LockThresholds {
+        LockThresholds {
+            cn0_dbhz: self.cn0_lock_threshold_dbhz,
+            pld: self.pld_threshold,
+            max_shape: self.max_correlation_shape,
+            windows_to_declare: self.lock_windows_to_declare,
+            windows_to_lose: self.lock_windows_to_lose,
         }
     }
 
@@ -93,6 +127,8 @@ impl ChannelConfig {
             self.dll_bandwidth_hz,
             self.cn0_lock_threshold_dbhz,
             self.pld_threshold,
+            self.max_correlation_shape,
+            self.cross_correlation_margin,
             self.max_doppler_rate_hz_s,
         ];
         if v.iter().any(|x| !x.is_finite()) {
@@ -105,7 +141,13 @@ impl ChannelConfig {
             && bw_ok(self.dll_pull_in_bandwidth_hz)
             && bw_ok(self.dll_bandwidth_hz);
         let rate_ok = (0.0..=1000.0).contains(&self.max_doppler_rate_hz_s);
-        if !bandwidths_ok || !rate_ok || self.lock_window == 0 || self.cn0_window == 0 {
+        let lock_ok = self.max_correlation_shape > 0.0
+            && self.max_correlation_shape <= 1.0
+            && self.lock_windows_to_declare > 0
+            && self.lock_windows_to_lose > 0
+            && self.cross_correlation_margin >= 0.0
+            && self.cross_correlation_windows > 0;
+        if !bandwidths_ok || !rate_ok || !lock_ok || self.lock_window == 0 || self.cn0_window == 0 {
             return Err(TrackingError::InvalidConfig);
         }
         Ok(())

@@ -1,13 +1,16 @@
 //! Acquisition and tracking of GPS L1 C/A signals on the reference antenna, with the other
 //! antennas' correlators slaved to the reference NCOs.
 //!
-//! * [`acquisition`]: FFT code-phase × Doppler search with a false-alarm threshold.
+//! * [`acquisition`]: FFT code-phase × Doppler search, a detection threshold from the
+//!   search's own background, a verification dwell and the cross-correlation test.
 //! * [`loops`]: Costas / FLL / DLL discriminators and the FLL-assisted PLL filter.
 //! * [`cn0`]: C/N0 and phase-lock indicator from the prompt and noise taps.
 //! * [`lock`]: lock detectors with hysteresis, bit synchronization.
 //! * [`channel`]: the per-satellite channel (hand-over → pull-in → tracking), one
 //!   [`TrackingEpoch`] per code period.
 //! * [`fft`]: the fixed-size f32 FFT acquisition uses.
+//! * [`xcorr`]: the C/A codes' cross-correlation and the test of whether a detection or a
+//!   channel is another satellite's cross-correlation.
 
 pub mod acquisition;
 pub mod channel;
@@ -17,6 +20,10 @@ pub mod fft;
 pub mod lock;
 pub mod loops;
 mod refine;
+pub mod xcorr;
 
-pub use acquisition::{Acquisition, AcquisitionConfig, SearchResult};
+pub use acquisition::{
+    Acquisition, AcquisitionConfig, CrossCheck, KnownSignal, SearchReport, SearchResult,
+    Verification,
+};
 pub use channel::{Channel, ChannelConfig, ChannelState, LockFlags, TrackingEpoch};

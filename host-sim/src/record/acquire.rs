@@ -1,24 +1,25 @@
 //! `host-sim acquire`: the core's acquisition ([`gnss_attitude::tracking::Acquisition`]) over
 //! the first milliseconds of a recording, every PRN searched in parallel.
 //!
-//! The detection threshold is the core's (Gamma tail of the non-coherent sum for the stated
-//! false-alarm probability per PRN search, noise only). Strong satellites add a second source
-//! of false peaks the noise model does not cover: the Gold-code cross-correlation (at most
-//! −23.9 dB of the strong signal's power at equal Doppler, and near multiples of 1 kHz from it
-//! through the code's 1 ms period). A detection whose Doppler lies within one bin of such a
-//! frequency of a stronger detection, and whose signal part of the metric (metric − 1) is
-//! more than [`AcquireOptions::cross_correlation_margin_db`] below the stronger one's, is
-//! reported as `rejected_cross_correlations` instead of as a detection.
+//! The detection test is the core's: a threshold from the search's own background (the
+//! false-alarm probability holds on thermal noise, noise-free simulator output, strong
+//! signals, saturated, DC and tone-jammed inputs), a verification dwell on the next
+//! milliseconds, then the cross-correlation test of each verified detection, strongest first,
+//! against the stronger ones accepted before it
+//! ([`gnss_attitude::tracking::Acquisition::cross_check`]): a detection whose power is within
+//! [`AcquireOptions::cross_correlation_margin_db`] of the cross-correlation the stronger
+//! satellites put at its code lag and Doppler offset is reported as
+//! `rejected_cross_correlations` instead of as a detection.
 
 use std::time::Instant;
 
 use anyhow::{ensure, Context, Result};
-use gnss_attitude::tracking::acquisition::MAX_DOPPLER_BINS;
-use gnss_attitude::tracking::{AcquisitionConfig, SearchResult};
+use gnss_attitude::tracking::acquisition::{detection_threshold, MAX_DOPPLER_BINS};
+use gnss_attitude::tracking::{AcquisitionConfig, KnownSignal, SearchResult, Verification};
 use serde::Serialize;
 
 use super::reader::Recording;
-use crate::chain::search_prns;
+use crate::chain::{detect_prns, Detections};
 
 /// Acquisition settings of the file commands.
 #[derive(Clone, Debug)]
@@ -35,14 +36,15 @@ pub struct AcquireOptions {
     pub false_alarm_probability: f64,
     /// Antenna searched (0 = the reference antenna).
     pub antenna: usize,
-    /// Cross-correlation test margin, dB (`None`: no test).
+    /// Margin of the cross-correlation test, dB: a detection at most this much above the
+    /// predicted cross-correlation of stronger satellites is rejected (`None`: no test).
     pub cross_correlation_margin_db: Option<f64>,
 }
 
 impl Default for AcquireOptions {
-    /// ±10 kHz in 500 Hz bins, 20 ms, PRN 1–32, P_fa = 10⁻⁵, antenna 0, 15 dB margin (20 ms:
-    /// at 10 ms a 40 dB-Hz satellite straddling a code and a Doppler bin sits near the
-    /// threshold, see the README).
+    /// ±10 kHz in 500 Hz bins, 20 ms (and 20 more for the verification dwell), PRN 1–32,
+    /// P_fa = 10⁻⁵, antenna 0, 3 dB cross-correlation margin (20 ms: at 10 ms a 40 dB-Hz
+    /// satellite straddling a code and a Doppler bin sits near the threshold, see the README).
     fn default() -> Self {
         Self {
             doppler_max_hz: 10_000.0,
@@ -51,7 +53,7 @@ impl Default for AcquireOptions {
             prns: (1..=32).collect(),
             false_alarm_probability: 1e-5,
             antenna: 0,
-            cross_correlation_margin_db: Some(15.0),
+            cross_correlation_margin_db: Some(3.0),
         }
     }
 }
@@ -67,6 +69,8 @@ pub struct Detection {
     pub code_phase_chips: f64,
     /// Peak cell over the mean cell.
     pub metric: f64,
+    /// The threshold of this PRN's search (its background's).
+    pub threshold: f64,
 }
 
 /// A peak over the threshold explained as the cross-correlation of a stronger satellite.
@@ -78,8 +82,30 @@ pub struct Rejected {
     pub doppler_hz: f64,
     /// Peak metric.
     pub metric: f64,
-    /// The stronger satellite.
+    /// The stronger satellite that contributes most.
     pub stronger_prn: u8,
+    /// The peak's power over the predicted cross-correlation power, dB.
+    pub over_predicted_db: f64,
+}
+
+/// One PRN's search as the core reports it.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct PrnSearch {
+    /// PRN.
+    pub prn: u8,
+    /// Peak over the background mean.
+    pub metric: f64,
+    /// Threshold on this background.
+    pub threshold: f64,
+    /// Milliseconds the background behaves as independent (the configured number on thermal
+    /// noise).
+    pub effective_ms: u16,
+    /// The peak exceeded the threshold.
+    pub candidate: bool,
+    /// `not_tested`, `no_samples`, `passed` or `failed`.
+    pub verification: &'static str,
+    /// Verified (the core's `detected`).
+    pub verified: bool,
 }
 
 /// What `acquire` reports (`--json` prints it as one object).
@@ -107,7 +133,8 @@ pub struct AcquireReport {
     pub doppler_step_hz: f64,
     /// False-alarm probability per PRN search.
     pub false_alarm_probability: f64,
-    /// Detection threshold on the metric.
+    /// Detection threshold on the metric on thermal noise (each PRN's search has its own,
+    /// higher on other backgrounds: `searches`).
     pub threshold: f64,
     /// PRNs searched.
     pub searched_prns: Vec<u8>,
@@ -117,6 +144,8 @@ pub struct AcquireReport {
     pub rejected_cross_correlations: Vec<Rejected>,
     /// Wall time of the search (reading and decoding excluded), s.
     pub search_s: f64,
+    /// Every PRN's search, in the order searched.
+    pub searches: Vec<PrnSearch>,
 }
 
 impl AcquireOptions {
@@ -193,15 +222,23 @@ pub fn acquire_with_searches(
         "the recording ({} samples) is shorter than one code period plus one sample",
         rec.instants
     );
-    let ms = u64::from(opts.ms).min(available) as u16;
+    // The search's milliseconds and as many again for the verification dwell.
+    let ms = u64::from(opts.ms).min(available / 2).max(1) as u16;
     if ms < opts.ms {
         eprintln!(
-            "acquire: the recording holds {available} ms: summing {ms} ms instead of {}",
+            "acquire: the recording holds {available} ms: summing {ms} ms (and {ms} ms of verification) instead of {}",
             opts.ms
         );
     }
     let config = opts.config(rec, ms)?;
-    let needed = config.samples_needed();
+    // Shorter than the search and its dwell: searched, but nothing can be verified.
+    let needed = config
+        .samples_needed()
+        .min(usize::try_from(rec.instants).unwrap_or(usize::MAX))
+        .max(config.search_samples());
+    if needed < config.samples_needed() {
+        eprintln!("acquire: the recording is too short for the verification dwell: nothing can be detected");
+    }
     let unit = rec.format.unit().0;
     let request = needed.div_ceil(unit) * unit;
     let mut reader = rec.reader()?;
@@ -216,17 +253,22 @@ pub fn acquire_with_searches(
     let i = &block.i[opts.antenna];
     let q = block.complex.then(|| &block.q[opts.antenna][..]);
     let started = Instant::now();
-    let results = search_prns(i, q, 0, &opts.prns, &config)?;
+    let found = detect(i, q, 0, &opts.prns, &config, opts, &[])?;
     let search_s = started.elapsed().as_secs_f64();
-    let threshold = results.first().map_or(f64::NAN, |r| f64::from(r.threshold));
-    let (accepted, rejected) = split_cross_correlations(&results, opts);
-    let detections = accepted
+    let threshold = f64::from(detection_threshold(
+        ms,
+        (2048 * config.doppler_bins()) as f64,
+        opts.false_alarm_probability,
+    ));
+    let detections = found
+        .accepted
         .iter()
         .map(|r| Detection {
             prn: r.prn.number(),
             doppler_hz: f64::from(r.doppler_hz),
             code_phase_chips: f64::from(r.code_phase_chips),
             metric: f64::from(r.metric),
+            threshold: f64::from(r.threshold),
         })
         .collect();
     let report = AcquireReport {
@@ -244,43 +286,64 @@ pub fn acquire_with_searches(
         threshold,
         searched_prns: opts.prns.clone(),
         detections,
-        rejected_cross_correlations: rejected,
+        rejected_cross_correlations: rejections(&found),
         search_s,
+        searches: found.reports.iter().map(prn_search).collect(),
     };
-    Ok((report, accepted, results))
+    let results = found.reports.iter().map(|r| r.result).collect();
+    Ok((report, found.accepted, results))
 }
 
-/// Detected results split into accepted ones (by PRN) and cross-correlation rejections (see
-/// the module documentation).
-pub fn split_cross_correlations(
-    results: &[SearchResult],
+/// The core's detection chain with this command's options: search, verification, and the
+/// cross-correlation test against the stronger detections and the `tracked` signals.
+///
+/// # Errors
+/// The core's refusal of the configuration or the samples.
+pub fn detect(
+    i: &[i8],
+    q: Option<&[i8]>,
+    first_sample: u64,
+    prns: &[u8],
+    config: &AcquisitionConfig,
     opts: &AcquireOptions,
-) -> (Vec<SearchResult>, Vec<Rejected>) {
-    let mut detected: Vec<SearchResult> = results.iter().filter(|r| r.detected).copied().collect();
-    detected.sort_by(|a, b| b.metric.total_cmp(&a.metric));
-    let mut accepted: Vec<SearchResult> = Vec::new();
-    let mut rejected = Vec::new();
-    for r in detected {
-        let culprit = opts.cross_correlation_margin_db.and_then(|margin| {
-            accepted.iter().find(|s| {
-                let df = f64::from(r.doppler_hz - s.doppler_hz).abs();
-                let ratio_db = 10.0
-                    * (f64::from(s.metric - 1.0) / f64::from(r.metric - 1.0).max(1e-9)).log10();
-                df <= opts.doppler_step_hz && ratio_db > margin
-            })
-        });
-        match culprit {
-            Some(s) => rejected.push(Rejected {
-                prn: r.prn.number(),
-                doppler_hz: f64::from(r.doppler_hz),
-                metric: f64::from(r.metric),
-                stronger_prn: s.prn.number(),
-            }),
-            None => accepted.push(r),
-        }
+    tracked: &[KnownSignal],
+) -> Result<Detections> {
+    let margin = opts
+        .cross_correlation_margin_db
+        .map(|db| 10f64.powf(db / 10.0) as f32);
+    detect_prns(i, q, first_sample, prns, config, tracked, margin)
+}
+
+fn rejections(found: &Detections) -> Vec<Rejected> {
+    found
+        .rejected
+        .iter()
+        .map(|x| Rejected {
+            prn: x.result.prn.number(),
+            doppler_hz: f64::from(x.result.doppler_hz),
+            metric: f64::from(x.result.metric),
+            stronger_prn: x.check.source.map_or(0, |p| p.number()),
+            over_predicted_db: 10.0
+                * (f64::from(x.check.power) / f64::from(x.check.predicted_power)).log10(),
+        })
+        .collect()
+}
+
+fn prn_search(r: &gnss_attitude::tracking::SearchReport) -> PrnSearch {
+    PrnSearch {
+        prn: r.result.prn.number(),
+        metric: f64::from(r.result.metric),
+        threshold: f64::from(r.result.threshold),
+        effective_ms: r.effective_ms,
+        candidate: r.candidate,
+        verification: match r.verification {
+            Verification::NotTested => "not_tested",
+            Verification::NoSamples => "no_samples",
+            Verification::Passed => "passed",
+            _ => "failed",
+        },
+        verified: r.result.detected,
     }
-    accepted.sort_by_key(|r| r.prn.number());
-    (accepted, rejected)
 }
 
 /// The human table of a report.
@@ -301,11 +364,11 @@ pub fn print_report(r: &AcquireReport) {
         r.false_alarm_probability,
         r.search_s
     );
-    println!("  PRN   Doppler (Hz)   code phase (chip)   metric");
+    println!("  PRN   Doppler (Hz)   code phase (chip)   metric   threshold");
     for d in &r.detections {
         println!(
-            "  {:3}   {:12.1}   {:17.3}   {:6.2}",
-            d.prn, d.doppler_hz, d.code_phase_chips, d.metric
+            "  {:3}   {:12.1}   {:17.3}   {:6.2}   {:9.2}",
+            d.prn, d.doppler_hz, d.code_phase_chips, d.metric, d.threshold
         );
     }
     if r.detections.is_empty() {
@@ -313,8 +376,14 @@ pub fn print_report(r: &AcquireReport) {
     }
     for x in &r.rejected_cross_correlations {
         println!(
-            "  PRN {} at {:.0} Hz (metric {:.2}) rejected: cross-correlation of PRN {}",
-            x.prn, x.doppler_hz, x.metric, x.stronger_prn
+            "  PRN {} at {:.0} Hz (metric {:.2}) rejected: cross-correlation of PRN {} ({:+.1} dB over the prediction)",
+            x.prn, x.doppler_hz, x.metric, x.stronger_prn, x.over_predicted_db
+        );
+    }
+    for x in r.searches.iter().filter(|x| x.candidate && !x.verified) {
+        println!(
+            "  PRN {} (metric {:.2} over {:.2}) not verified on the next {} ms ({})",
+            x.prn, x.metric, x.threshold, r.noncoherent_ms, x.verification
         );
     }
 }

@@ -2,6 +2,7 @@
 //! Doppler-rate fit and the attitude sums, fed one epoch at a time; and the thermal C/N0
 //! (the other satellites' cross-correlation removed).
 
+use gnss_attitude::tracking::channel::Cn0Estimate;
 use gnss_attitude::tracking::{ChannelState, SearchResult, TrackingEpoch};
 use serde::Serialize;
 
@@ -42,7 +43,9 @@ pub struct SatelliteReport {
     pub losses: u32,
     /// Re-acquisitions (successful hand-overs after a loss).
     pub reacquisitions: u32,
-    /// Mean of the 1 s C/N0 reports from 2 s on (all reports if fewer), dB-Hz.
+    /// Mean of the 1 s C/N0 reports from 2 s on (all reports if fewer; the channel's last
+    /// estimate, from its 100 ms lock windows, when the run is shorter than one report:
+    /// `cn0_short_window`), dB-Hz.
     pub cn0_dbhz_mean: f64,
     /// Smallest and largest of those reports, dB-Hz.
     pub cn0_dbhz_range: [f64; 2],
@@ -56,6 +59,15 @@ pub struct SatelliteReport {
     pub doppler_hz_per_s: Vec<Option<f64>>,
     /// C/N0 reports over time (one per second after the first), dB-Hz.
     pub cn0_dbhz_per_s: Vec<f64>,
+    /// Seconds of samples `cn0_dbhz_mean` rests on (0 without an estimate).
+    pub cn0_basis_s: f64,
+    /// `cn0_dbhz_mean` rests on less than one second (no 1 s report).
+    pub cn0_short_window: bool,
+    /// The noise estimate fell below what the samples' quantization allows (a noise-free
+    /// recording): the C/N0 is then the signal over the quantization floor.
+    pub cn0_quantization_limited: bool,
+    /// Times the channel released itself as another satellite's cross-correlation.
+    pub cross_correlation_releases: u32,
 }
 
 /// The running state of one satellite (the companion of its channel).
@@ -83,6 +95,11 @@ pub struct SatTrack {
     cn0_reports: Vec<(f64, f64)>,
     // Doppler-rate least squares over locked epochs: Σ1, Σt, Σt², Σf, Σtf
     fit: [f64; 5],
+    // the channel's C/N0 estimate after the last block, and whether one was quantization
+    // limited while locked
+    cn0_estimate: Cn0Estimate,
+    cn0_quantization_limited: bool,
+    cross_correlation_releases: u32,
     /// Phase and code sums of the attitude windows.
     pub phases: Option<PhaseAccumulator>,
 }
@@ -110,7 +127,32 @@ impl SatTrack {
             cn0_last: f64::NAN,
             cn0_reports: Vec::new(),
             fit: [0.0; 5],
+            cn0_estimate: Cn0Estimate::default(),
+            cn0_quantization_limited: false,
+            cross_correlation_releases: 0,
             phases,
+        }
+    }
+
+    /// Notes the channel's C/N0 estimate after a block.
+    pub(super) fn note_cn0(&mut self, e: Cn0Estimate) {
+        if e.cn0_dbhz > 0.0 {
+            self.cn0_estimate = e;
+            if self.run_start.is_some() && e.quantization_limited {
+                self.cn0_quantization_limited = true;
+            }
+        }
+    }
+
+    /// Stops the satellite after its channel released itself as a cross-correlation; it is
+    /// searched again from `retry_at` (s).
+    pub(super) fn release_as_cross_correlation(&mut self, retry_at: f64) {
+        self.active = false;
+        self.retry_at = retry_at;
+        self.cross_correlation_releases += 1;
+        if let Some(run) = self.run_start.take() {
+            self.longest = self.longest.max(self.last_t - run);
+            self.losses += 1;
         }
     }
 
@@ -219,6 +261,9 @@ impl SatTrack {
             late
         };
         let mean = reports.iter().sum::<f64>() / reports.len().max(1) as f64;
+        // Shorter than one report: the channel's last estimate (from its lock windows).
+        let short = reports.is_empty() && self.cn0_estimate.cn0_dbhz > 0.0;
+        let last = f64::from(self.cn0_estimate.cn0_dbhz);
         let range = reports
             .iter()
             .fold([f64::INFINITY, f64::NEG_INFINITY], |r, &c| {
@@ -253,16 +298,28 @@ impl SatTrack {
             held_to_end: held,
             losses: self.losses,
             reacquisitions: self.reacquisitions,
-            cn0_dbhz_mean: if reports.is_empty() { f64::NAN } else { mean },
-            cn0_dbhz_range: if reports.is_empty() {
-                [f64::NAN; 2]
-            } else {
-                range
+            cn0_dbhz_mean: match (reports.is_empty(), short) {
+                (false, _) => mean,
+                (true, true) => last,
+                (true, false) => f64::NAN,
+            },
+            cn0_dbhz_range: match (reports.is_empty(), short) {
+                (false, _) => range,
+                (true, true) => [last; 2],
+                (true, false) => [f64::NAN; 2],
             },
             cn0_dbhz_thermal: f64::NAN,
             doppler_rate_hz_s: rate,
             doppler_hz_per_s: per_s(&self.rows),
             cn0_dbhz_per_s: self.cn0_reports.iter().map(|r| r.1).collect(),
+            cn0_basis_s: if short {
+                f64::from(self.cn0_estimate.window_s)
+            } else {
+                reports.len() as f64
+            },
+            cn0_short_window: short,
+            cn0_quantization_limited: self.cn0_quantization_limited,
+            cross_correlation_releases: self.cross_correlation_releases,
         }
     }
 

@@ -12,22 +12,27 @@
 //! its pull-in allowance; phase lock too, because a 100 ms code-lock window passes the C/N0
 //! threshold on noise alone a few times in a thousand) is searched again on the next
 //! milliseconds of the stream (same settings as the first acquisition) and, when found, handed
-//! over again; otherwise searched again [`RETRY_EVERY_S`] later.
+//! over again; otherwise searched again [`RETRY_EVERY_S`] later. The re-acquisition tests its
+//! detections against the cross-correlation of the satellites still tracked as well.
+//!
+//! Cross-correlation: after each block every channel is checked against the others
+//! ([`gnss_attitude::tracking::Channel::check_cross_correlation`]); a channel that sits on a
+//! stronger satellite's cross-correlation releases itself and is searched again later (the
+//! re-acquisition then rejects it while the stronger satellite is tracked).
 
 use std::time::Instant;
 
 use anyhow::{ensure, Result};
 use gnss_attitude::signal::SampleBlock;
-use gnss_attitude::tracking::{AcquisitionConfig, Channel, ChannelConfig};
+use gnss_attitude::tracking::xcorr::SignalProbe;
+use gnss_attitude::tracking::{AcquisitionConfig, Channel, ChannelConfig, KnownSignal};
 use serde::Serialize;
 
-use super::acquire::{
-    acquire_with_searches, split_cross_correlations, AcquireOptions, AcquireReport,
-};
+use super::acquire::{acquire_with_searches, detect, AcquireOptions, AcquireReport};
 use super::attitude::{AttitudeReport, AttitudeSetup, AttitudeSolver};
 use super::reader::{Block, Recording};
 pub use super::satellite::{mai_corrected_cn0, Row, SatTrack, SatelliteReport};
-use crate::chain::{search_prns, track_block};
+use crate::chain::track_block;
 
 /// Seconds without code and phase lock after which a satellite is re-acquired.
 pub const REACQUIRE_AFTER_S: f64 = 1.0;
@@ -198,8 +203,9 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         let t0 = Instant::now();
         let sb: SampleBlock<'_, A> = block.samples()?;
         track_block(&mut channels, &sb, |s| s.active, |s, e| s.epoch(e))?;
-        wall.tracking_s += t0.elapsed().as_secs_f64();
         let now = (block.first + block.len() as u64) as f64 / fs;
+        release_cross_correlations(&mut channels, now);
+        wall.tracking_s += t0.elapsed().as_secs_f64();
         bar.inc(1);
         if opts.reacquire {
             let t0 = Instant::now();
@@ -261,6 +267,23 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
     })
 }
 
+/// Runs every active channel's cross-correlation check against the others (their probes on
+/// the same samples: all channels stand at the block's end) and stops the channels that
+/// released themselves; they are searched again after [`RETRY_EVERY_S`].
+fn release_cross_correlations<const A: usize>(channels: &mut [(Channel<A>, SatTrack)], now: f64) {
+    let probes: Vec<SignalProbe> = channels
+        .iter()
+        .filter(|(_, s)| s.active)
+        .filter_map(|(ch, _)| ch.probe())
+        .collect();
+    for (ch, s) in channels.iter_mut().filter(|(_, s)| s.active) {
+        s.note_cn0(ch.cn0_estimate());
+        if ch.check_cross_correlation(&probes).is_some() {
+            s.release_as_cross_correlation(now + RETRY_EVERY_S);
+        }
+    }
+}
+
 /// Marks satellites that lost lock, collects reference-antenna samples for them, searches
 /// when enough are in, and hands the found ones over again.
 fn reacquire<const A: usize>(
@@ -308,14 +331,18 @@ fn reacquire<const A: usize>(
         .map(|(_, s)| s.prn)
         .collect();
     let q = block.complex.then_some(&c.q[..]);
-    let results = search_prns(&c.i, q, c.first, &prns, config)?;
-
-    let (found, _) = split_cross_correlations(&results, opts);
-    for r in results {
+    // The satellites still tracked, as known signals on the collected samples.
+    let tracked: Vec<KnownSignal> = channels
+        .iter()
+        .filter(|(_, s)| s.active)
+        .filter_map(|(ch, _)| ch.known_signal_at(c.first))
+        .collect();
+    let found = detect(&c.i, q, c.first, &prns, config, opts, &tracked)?;
+    for r in found.reports.iter().map(|r| r.result) {
         let Some((ch, s)) = channels.iter_mut().find(|(_, s)| s.prn == r.prn.number()) else {
             continue;
         };
-        if found.iter().any(|f| f.prn == r.prn) {
+        if found.accepted.iter().any(|f| f.prn == r.prn) {
             ch.start(&r)?;
             s.active = true;
             s.started_t = now;

@@ -1,0 +1,419 @@
+//! Acquisition on the reference antenna: a code-phase × Doppler search with parallel code
+//! phase (FFT circular correlation), fixed memory, bounded time, and a detection test that
+//! holds its false-alarm probability on any background: thermal noise, noise-free simulator
+//! output, strong signals, saturated, constant or tone-jammed inputs.
+//!
+//! # Method
+//! The mean of the samples searched is removed first (a DC offset, a constant or saturated
+//! input would otherwise correlate with every code at the Doppler bins near multiples of
+//! 1 kHz). For each Doppler bin `f` (from `−f_max` to `+f_max` in steps of `Δf`) and each of
+//! `K` milliseconds: the samples are mixed with `e^{−j2π(f_IF + f)t}` (the carrier table of
+//! the correlator) and integrated-and-dumped into `N` bins per millisecond (`N` a power of two
+//! ≥ 1024: 0.5 chip per bin for `N = 2048`); the `N`-point FFT of that, with the lines above
+//! [`EXCISION_FACTOR`] times the background line power removed together with their leakage
+//! (a continuous-wave interferer: frequency-domain excision), times the conjugate spectrum of the code integrated over the same bins,
+//! inverse-transformed, gives the correlation at all `N` code phases. `|·|²` is summed over the `K` ms (non-coherently, so
+//! data bits do not matter), shifting each millisecond by the code Doppler `m·N·f/f_L1` bins
+//! so that the code drift of LEO Dopplers does not smear the peak.
+//!
+//! # Detection: a threshold from the search's own background
+//! With thermal noise only, each cell's `K`-ms sum over the background mean is `Gamma(K, 1/K)`
+//! distributed (a sum of `K` exponentials). Other backgrounds are not: without thermal noise
+//! the cells hold the other satellites' cross-correlations, which repeat every millisecond
+//! (the sum over `K` ms does not average them), and a strong satellite, a tone or a DC offset
+//! put structure of their own into the cells. The test therefore measures the background
+//! from the search itself: in every Doppler bin the cells more than [`FLOOR_GUARD_CHIPS`]
+//! from that bin's peak give the mean `μ` and the variance `σ²` of the background, and
+//! `K_eff = ⌊μ²/σ²⌋` (clamped to `1..=K`) is the number of independent milliseconds the
+//! background behaves as (`K` on thermal noise, where `σ² = μ²/K`; 1 when the cells repeat
+//! every millisecond). For a false-alarm probability `P_fa` per PRN search over
+//! `M = N · (Doppler bins)` cells the per-cell probability is `p = 1 − (1 − P_fa)^{1/M}` and
+//! the threshold `t` solves `Q(K_eff, K_eff t) = p` (regularized upper incomplete gamma,
+//! bisection bounded to 100 steps). A PRN is a *candidate* when its peak over `μ` exceeds `t`.
+//! On thermal noise `K_eff = K` and the test is the classic one (same detection and false-alarm
+//! probabilities).
+//!
+//! # Verification dwell
+//! A candidate is re-tested on the next `K` milliseconds (fresh data): three Doppler bins
+//! (the refined Doppler and ±`Δf/2`), and the peak sought within
+//! [`VERIFICATION_CODE_WINDOW_CHIPS`] of the code phase the candidate predicts there, against
+//! the same kind of threshold for [`VERIFICATION_FALSE_ALARM`] over those few cells. A PRN is
+//! *detected* only when its candidate passes the dwell ([`AcquisitionConfig::samples_needed`]
+//! counts both periods; with fewer samples a candidate is reported but not detected).
+//!
+//! # Cross-correlation test
+//! The other satellites' cross-correlation repeats every millisecond and passes the dwell; it
+//! is tested against the stronger satellites already detected or tracked
+//! ([`Acquisition::cross_check`]): each signal's power is measured on the samples searched by
+//! a direct correlation at its code phase and Doppler, and the candidate is rejected when its
+//! power is explained by the stronger ones' cross-correlation at its code lag and Doppler
+//! offset ([`super::xcorr`]; the strong cases are Doppler differences near multiples of 1 kHz).
+//!
+//! # Refinement
+//! The code phase is refined by the triangle interpolation of the peak and its two code
+//! neighbours, the Doppler by a parabola through the peak amplitudes of the neighbouring
+//! Doppler bins.
+//!
+//! # Memory and time
+//! `Acquisition<N>` holds four `N`-element arrays (twiddles, code spectrum, data, power) and
+//! one peak per Doppler bin: 60 KiB for `N = 2048`, 30 KiB for `N = 1024` (the target's
+//! choice). Per PRN: `bins · K` × (mixing of 1 ms of samples + two FFTs); a candidate's dwell
+//! adds `3 · K` of those; the cross-correlation test `K` ms of direct correlation per signal.
+
+mod check;
+mod scan;
+mod tone;
+
+use super::fft::{Complex, Fft};
+use crate::error::AcquisitionError;
+use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ};
+
+pub use check::{CrossCheck, KnownSignal};
+pub use scan::EXCISION_FACTOR;
+pub use tone::TONE_FACTOR;
+
+/// Most Doppler bins one search may have (±50 kHz in 250 Hz steps fits).
+pub const MAX_DOPPLER_BINS: usize = 401;
+
+/// Most milliseconds summed non-coherently.
+pub const MAX_NONCOHERENT_MS: u16 = 200;
+
+/// Code distance from a Doppler bin's peak within which cells are left out of the background
+/// statistics, chips (the correlation triangle is ±1 chip wide).
+pub const FLOOR_GUARD_CHIPS: f32 = 1.5;
+
+/// False-alarm probability of the verification dwell over its cells.
+pub const VERIFICATION_FALSE_ALARM: f64 = 1e-3;
+
+/// Half-width of the code window the verification dwell searches around the predicted code
+/// phase, chips.
+pub const VERIFICATION_CODE_WINDOW_CHIPS: f32 = 1.0;
+
+/// A candidate is another satellite's cross-correlation when its power is at most this
+/// times the predicted cross-correlation power (3 dB).
+pub const CROSS_CORRELATION_MARGIN: f32 = 2.0;
+
+/// What to search and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AcquisitionConfig {
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Intermediate frequency, Hz (0 for complex baseband).
+    pub intermediate_frequency_hz: f64,
+    /// The search covers Dopplers in `[−doppler_max_hz, +doppler_max_hz]`, Hz (up to 50 kHz
+    /// for LEO).
+    pub doppler_max_hz: f32,
+    /// Doppler bin spacing, Hz (500 Hz loses at most 0.9 dB with 1 ms coherent sums).
+    pub doppler_step_hz: f32,
+    /// Milliseconds summed non-coherently, `K` (the search, and again the verification
+    /// dwell).
+    pub noncoherent_ms: u16,
+    /// Probability of a false detection per PRN search, on any background.
+    pub false_alarm_probability: f32,
+}
+
+impl AcquisitionConfig {
+    /// Number of Doppler bins.
+    pub fn doppler_bins(&self) -> usize {
+        let half = libm::floorf(self.doppler_max_hz / self.doppler_step_hz);
+        if half.is_finite() && half >= 0.0 {
+            2 * half as usize + 1
+        } else {
+            0
+        }
+    }
+
+    /// Samples a search with its verification dwell reads: `2K` ms (rounded up) plus one.
+    pub fn samples_needed(&self) -> usize {
+        self.samples_for_ms(2 * u32::from(self.noncoherent_ms))
+    }
+
+    /// Samples the search alone reads (no verification dwell: candidates are not detected):
+    /// `K` ms (rounded up) plus one.
+    pub fn search_samples(&self) -> usize {
+        self.samples_for_ms(u32::from(self.noncoherent_ms))
+    }
+
+    fn samples_for_ms(&self, ms: u32) -> usize {
+        libm::ceil(f64::from(ms) * self.sample_rate_hz * 1e-3) as usize + 1
+    }
+
+    /// First sample of millisecond `m` of the searched samples.
+    fn ms_start(&self, m: usize) -> usize {
+        libm::ceil(m as f64 * self.sample_rate_hz * 1e-3) as usize
+    }
+
+    fn validate(&self) -> Result<(), AcquisitionError> {
+        let finite = self.sample_rate_hz.is_finite()
+            && self.intermediate_frequency_hz.is_finite()
+            && self.doppler_max_hz.is_finite()
+            && self.doppler_step_hz.is_finite()
+            && self.false_alarm_probability.is_finite();
+        if !finite {
+            return Err(AcquisitionError::NonFinite);
+        }
+        let fs = self.sample_rate_hz;
+        let front_end_ok =
+            (CA_CHIP_RATE_HZ..=64e6).contains(&fs) && self.intermediate_frequency_hz.abs() < fs;
+        let doppler_ok = self.doppler_step_hz >= 10.0 && self.doppler_max_hz >= 0.0;
+        if !front_end_ok
+            || !doppler_ok
+            || self.doppler_bins() == 0
+            || self.doppler_bins() > MAX_DOPPLER_BINS
+            || self.noncoherent_ms == 0
+            || self.noncoherent_ms > MAX_NONCOHERENT_MS
+            || !(self.false_alarm_probability > 0.0 && self.false_alarm_probability < 0.5)
+        {
+            return Err(AcquisitionError::InvalidConfig);
+        }
+        Ok(())
+    }
+}
+
+/// The outcome of one PRN's search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SearchResult {
+    /// The PRN searched.
+    pub prn: Prn,
+    /// Whether the peak exceeded the threshold and passed the verification dwell.
+    pub detected: bool,
+    /// Peak cell over the background's mean cell (the test statistic).
+    pub metric: f32,
+    /// The detection threshold for the configured false-alarm probability on this search's
+    /// background.
+    pub threshold: f32,
+    /// Doppler of the peak, refined, Hz.
+    pub doppler_hz: f32,
+    /// Code phase of the received code at the first sample searched, chips in `[0, 1023)`.
+    pub code_phase_chips: f32,
+    /// Receiver sample index of the first sample searched.
+    pub first_sample: u64,
+}
+
+/// What the verification dwell concluded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Verification {
+    /// No candidate: nothing to verify.
+    NotTested,
+    /// A candidate, but the samples end before the dwell's (not detected).
+    NoSamples,
+    /// The candidate's peak was found again on fresh data.
+    Passed,
+    /// It was not (not detected).
+    Failed,
+}
+
+/// A search with the figures of its background and its verification.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SearchReport {
+    /// The result ([`Acquisition::search`]'s).
+    pub result: SearchResult,
+    /// The peak exceeded the threshold (before the verification).
+    pub candidate: bool,
+    /// Milliseconds the background behaves as independent (`K` on thermal noise, 1 when it
+    /// repeats every millisecond).
+    pub effective_ms: u16,
+    /// Mean background cell, engine units (cells away from each Doppler bin's peak).
+    pub noise_floor: f32,
+    /// The verification dwell.
+    pub verification: Verification,
+    /// The dwell's peak over its background (0 when not run).
+    pub verification_metric: f32,
+    /// The dwell's threshold (0 when not run).
+    pub verification_threshold: f32,
+}
+
+/// The acquisition engine with its fixed workspace (`N` bins per millisecond).
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Acquisition<const N: usize> {
+    fft: Fft<N>,
+    code: [Complex; N],
+    data: [Complex; N],
+    power: [f32; N],
+    peaks: [(f32, u32); MAX_DOPPLER_BINS],
+    /// Background line power of the samples' spectrum (interference excision; 0: none).
+    level: f32,
+    /// Tones cancelled from these samples, the first `tone_count`.
+    tones: [tone::Tone; tone::MAX_TONES],
+    tone_count: usize,
+}
+
+impl<const N: usize> Acquisition<N> {
+    /// A new engine.
+    ///
+    /// # Errors
+    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192.
+    pub fn new() -> Result<Self, AcquisitionError> {
+        if !(1024..=8192).contains(&N) {
+            return Err(AcquisitionError::InvalidConfig);
+        }
+        let fft = Fft::new().ok_or(AcquisitionError::InvalidConfig)?;
+        Ok(Self {
+            fft,
+            code: [[0.0; 2]; N],
+            data: [[0.0; 2]; N],
+            power: [0.0; N],
+            peaks: [(0.0, 0); MAX_DOPPLER_BINS],
+            level: 0.0,
+            tones: [tone::Tone::default(); tone::MAX_TONES],
+            tone_count: 0,
+        })
+    }
+
+    /// Searches `prn` in the reference antenna's samples (`q = None` for real samples) and
+    /// verifies a candidate on the samples after the search's (see the module
+    /// documentation). `first_sample` is the receiver index of `i[0]`.
+    ///
+    /// Bounded: `(bins + 3) · K` iterations, each one millisecond of samples and two
+    /// `N`-point FFTs.
+    ///
+    /// # Errors
+    /// [`AcquisitionError::InvalidConfig`], [`AcquisitionError::NonFinite`],
+    /// [`AcquisitionError::NotEnoughSamples`] (fewer than
+    /// [`AcquisitionConfig::search_samples`]; between that and
+    /// [`AcquisitionConfig::samples_needed`] nothing is detected),
+    /// [`AcquisitionError::LengthMismatch`] (`q` shorter than `i`).
+    pub fn search(
+        &mut self,
+        prn: Prn,
+        i: &[i8],
+        q: Option<&[i8]>,
+        first_sample: u64,
+        config: &AcquisitionConfig,
+    ) -> Result<SearchResult, AcquisitionError> {
+        self.search_report(prn, i, q, first_sample, config)
+            .map(|r| r.result)
+    }
+
+    /// [`Acquisition::search`] with the background's figures and the verification's outcome.
+    ///
+    /// # Errors
+    /// As [`Acquisition::search`].
+    pub fn search_report(
+        &mut self,
+        prn: Prn,
+        i: &[i8],
+        q: Option<&[i8]>,
+        first_sample: u64,
+        config: &AcquisitionConfig,
+    ) -> Result<SearchReport, AcquisitionError> {
+        check_inputs(i, q, config)?;
+        let dc = input_mean(i, q, config.samples_needed());
+        self.prepare_interference(i, q, config, dc);
+        self.prepare_code(prn);
+        let grid = scan::Grid::search(config);
+        let (peak, floor) = self.scan(i, q, &grid, None, config, dc);
+        let k = config.noncoherent_ms;
+        let effective_ms = floor.effective_ms(k);
+        let noise_floor = floor.mean();
+        let cells = (N * config.doppler_bins()) as f64;
+        let threshold = detection_threshold(
+            effective_ms,
+            cells,
+            f64::from(config.false_alarm_probability),
+        );
+        let metric = if noise_floor > 0.0 {
+            peak.power / noise_floor
+        } else {
+            0.0
+        };
+        let (doppler_hz, code_phase_chips) = self.refine(&peak, &grid);
+        let candidate = metric > threshold;
+        let dwell = if candidate {
+            self.verify(i, q, doppler_hz, code_phase_chips, effective_ms, config, dc)
+        } else {
+            scan::Dwell::not_tested()
+        };
+        Ok(SearchReport {
+            result: SearchResult {
+                prn,
+                detected: candidate && dwell.verification == Verification::Passed,
+                metric,
+                threshold,
+                doppler_hz,
+                code_phase_chips,
+                first_sample,
+            },
+            candidate,
+            effective_ms,
+            noise_floor,
+            verification: dwell.verification,
+            verification_metric: dwell.metric,
+            verification_threshold: dwell.threshold,
+        })
+    }
+}
+
+/// Checks the configuration and the sample slices (at least the search's samples).
+fn check_inputs(
+    i: &[i8],
+    q: Option<&[i8]>,
+    config: &AcquisitionConfig,
+) -> Result<(), AcquisitionError> {
+    config.validate()?;
+    if i.len() < config.search_samples() {
+        return Err(AcquisitionError::NotEnoughSamples);
+    }
+    if let Some(q) = q {
+        if q.len() < i.len() {
+            return Err(AcquisitionError::LengthMismatch);
+        }
+    }
+    Ok(())
+}
+
+/// The mean of the first `n` samples (fewer if the slices are shorter), `[I, Q]`.
+fn input_mean(i: &[i8], q: Option<&[i8]>, n: usize) -> [f32; 2] {
+    let n = n.min(i.len());
+    if n == 0 {
+        return [0.0; 2];
+    }
+    let sum = |s: &[i8]| s.iter().take(n).map(|&x| i64::from(x)).sum::<i64>() as f64;
+    let mi = sum(i) / n as f64;
+    let mq = q.map_or(0.0, |q| sum(q) / n as f64);
+    [mi as f32, mq as f32]
+}
+
+/// The threshold `t` on peak/mean for a false-alarm probability `p_fa` over `cells` cells with
+/// `k` independent ms summed: solves `Q(k, k t) = 1 − (1 − p_fa)^{1/cells}` by bisection
+/// (100 steps).
+pub fn detection_threshold(k: u16, cells: f64, p_fa: f64) -> f32 {
+    let k = f64::from(k.clamp(1, MAX_NONCOHERENT_MS));
+    // Per-cell probability, in logs for accuracy: ln p = ln(−expm1(ln(1−P)/M)).
+    let ln_p_cell = libm::log(-libm::expm1(libm::log1p(-p_fa) / cells.max(1.0)));
+    let (mut lo, mut hi) = (1.0f64, 200.0f64);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if ln_gamma_survival(k, k * mid) > ln_p_cell {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (0.5 * (lo + hi)) as f32
+}
+
+/// `ln Q(k, x) = ln(e^{−x} Σ_{i<k} xⁱ/i!)` for integer `k` (log-sum-exp, `k` ≤ 200 terms).
+fn ln_gamma_survival(k: f64, x: f64) -> f64 {
+    let n = k as usize;
+    let mut max_term = f64::NEG_INFINITY;
+    let mut ln_term = 0.0f64; // ln(x^0/0!)
+    let mut terms = [0.0f64; MAX_NONCOHERENT_MS as usize];
+    for (i, t) in terms.iter_mut().enumerate().take(n) {
+        if i > 0 {
+            ln_term += libm::log(x) - libm::log(i as f64);
+        }
+        *t = ln_term;
+        max_term = max_term.max(ln_term);
+    }
+    let mut sum = 0.0;
+    for t in terms.iter().take(n) {
+        sum += libm::exp(t - max_term);
+    }
+    -x + max_term + libm::log(sum)
+}

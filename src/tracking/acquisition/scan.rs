@@ -1,0 +1,518 @@
+//! The code × Doppler scan of the search and of the verification dwell, the background
+//! statistics, the refinement of the peak.
+
+use super::tone::{rotate, MAX_TONES};
+use super::{
+    detection_threshold, Acquisition, AcquisitionConfig, Verification, FLOOR_GUARD_CHIPS,
+    VERIFICATION_CODE_WINDOW_CHIPS, VERIFICATION_FALSE_ALARM,
+};
+use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};
+use crate::signal::nco::{carrier_index, CarrierNco, COS_TABLE, SIN_TABLE};
+use crate::tracking::fft::Complex;
+
+/// Sub-samples per code bin when the code is integrated into the `N` bins.
+const CODE_SUBSAMPLES: usize = 8;
+
+/// A spectral line of one millisecond's samples above this many times the background line
+/// power is interference (a tone): it is removed with its leakage before the correlation.
+/// Thermal noise exceeds it with probability `e^{−15}` = 3·10⁻⁷ per line; satellites spread
+/// their power over a thousand lines and stay below it up to 60 dB-Hz.
+pub const EXCISION_FACTOR: f32 = 15.0;
+
+/// Most interference lines removed per millisecond (the strongest first; a tone becomes a
+/// comb of lines through the integrate-and-dump's uneven sample counts per bin).
+const MAX_EXCISED_LINES: usize = 32;
+
+/// Steps of the trimmed mean that estimates the background line power.
+const LEVEL_STEPS: usize = 4;
+
+/// Doppler bins of the verification dwell (the refined Doppler and ± half a step).
+const DWELL_BINS: usize = 3;
+
+/// Which Dopplers a scan covers, from which millisecond of the samples.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Grid {
+    /// Doppler of bin 0, Hz.
+    first_hz: f32,
+    /// Bin spacing, Hz.
+    step_hz: f32,
+    /// Number of bins.
+    bins: usize,
+    /// First millisecond of the samples the scan sums.
+    first_ms: usize,
+}
+
+impl Grid {
+    /// The search's grid: `±doppler_max` in `doppler_step` bins over the first `K` ms.
+    pub(super) fn search(config: &AcquisitionConfig) -> Self {
+        let bins = config.doppler_bins();
+        Self {
+            first_hz: -((bins / 2) as f32) * config.doppler_step_hz,
+            step_hz: config.doppler_step_hz,
+            bins,
+            first_ms: 0,
+        }
+    }
+
+    /// The dwell's grid: `doppler` and ± half a step over milliseconds `K..2K`.
+    fn dwell(config: &AcquisitionConfig, doppler: f32) -> Self {
+        Self {
+            first_hz: doppler - 0.5 * config.doppler_step_hz,
+            step_hz: 0.5 * config.doppler_step_hz,
+            bins: DWELL_BINS,
+            first_ms: usize::from(config.noncoherent_ms),
+        }
+    }
+
+    fn doppler(&self, bin: usize) -> f32 {
+        self.first_hz + bin as f32 * self.step_hz
+    }
+}
+
+/// The strongest cell of a scan (within its code window).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Peak {
+    /// Power, engine units.
+    pub(super) power: f32,
+    /// Doppler bin.
+    bin: usize,
+    /// Code bin (lag).
+    lag: usize,
+    /// Powers of the code bins before and after.
+    neighbours: [f32; 2],
+}
+
+/// Sums over the background cells (away from each Doppler bin's peak).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Floor {
+    sum: f64,
+    sum_sq: f64,
+    count: u64,
+}
+
+impl Floor {
+    /// Adds one Doppler bin's cells except those within `guard` bins of `peak_at`.
+    fn add_bin(&mut self, power: &[f32], peak_at: usize, guard: usize) {
+        let n = power.len();
+        for (l, &p) in power.iter().enumerate() {
+            let d = l.abs_diff(peak_at);
+            if d.min(n - d) > guard {
+                let p = f64::from(p);
+                self.sum += p;
+                self.sum_sq += p * p;
+                self.count += 1;
+            }
+        }
+    }
+
+    /// Mean background cell (0 without cells).
+    pub(super) fn mean(&self) -> f32 {
+        if self.count == 0 {
+            0.0
+        } else {
+            (self.sum / self.count as f64) as f32
+        }
+    }
+
+    /// `⌊μ²/σ²⌋` clamped to `1..=k` (`k` for a background without spread, 1 without cells).
+    pub(super) fn effective_ms(&self, k: u16) -> u16 {
+        if self.count < 2 {
+            return 1;
+        }
+        let n = self.count as f64;
+        let mean = self.sum / n;
+        let var = (self.sum_sq / n - mean * mean).max(0.0);
+        if !(mean > 0.0) {
+            return 1;
+        }
+        if !(var > 0.0) {
+            return k.max(1);
+        }
+        let ratio = libm::floor(mean * mean / var);
+        if ratio >= f64::from(k) {
+            k.max(1)
+        } else if ratio >= 1.0 {
+            ratio as u16
+        } else {
+            1
+        }
+    }
+}
+
+/// The outcome of a verification dwell.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Dwell {
+    pub(super) verification: Verification,
+    pub(super) metric: f32,
+    pub(super) threshold: f32,
+}
+
+impl Dwell {
+    pub(super) fn not_tested() -> Self {
+        Self {
+            verification: Verification::NotTested,
+            metric: 0.0,
+            threshold: 0.0,
+        }
+    }
+}
+
+/// A code window for the peak search: centre lag and half-width, bins.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CodeWindow {
+    centre: usize,
+    half: usize,
+}
+
+impl CodeWindow {
+    fn contains(&self, lag: usize, n: usize) -> bool {
+        let d = lag.abs_diff(self.centre);
+        d.min(n - d) <= self.half
+    }
+}
+
+impl<const N: usize> Acquisition<N> {
+    /// The code of `prn` integrated over the `N` bins of one code period, transformed.
+    pub(super) fn prepare_code(&mut self, prn: Prn) {
+        for (b, c) in self.code.iter_mut().enumerate() {
+            let mut s = 0i32;
+            for k in 0..CODE_SUBSAMPLES {
+                let chip = ((b * CODE_SUBSAMPLES + k) * CA_CODE_LENGTH) / (N * CODE_SUBSAMPLES);
+                s += i32::from(prn.chip(chip));
+            }
+            *c = [s as f32 / CODE_SUBSAMPLES as f32, 0.0];
+        }
+        self.fft.transform(&mut self.code, false);
+    }
+
+    /// Scans the grid's Doppler bins: the strongest cell (within `window` if given), and the
+    /// background statistics; fills `self.peaks` with each bin's strongest cell.
+    pub(super) fn scan(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        grid: &Grid,
+        window: Option<CodeWindow>,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) -> (Peak, Floor) {
+        let guard = libm::ceilf(FLOOR_GUARD_CHIPS * N as f32 / CA_CODE_LENGTH as f32) as usize;
+        let mut best = Peak::default();
+        let mut floor = Floor::default();
+        for b in 0..grid.bins {
+            self.accumulate(i, q, grid.first_ms, grid.doppler(b), config, dc);
+            let (mut local, mut local_at) = (0.0f32, 0usize);
+            let (mut top, mut top_at) = (0.0f32, None);
+            for (l, &p) in self.power.iter().enumerate() {
+                if p > local {
+                    (local, local_at) = (p, l);
+                }
+                if p > top && window.is_none_or(|w| w.contains(l, N)) {
+                    (top, top_at) = (p, Some(l));
+                }
+            }
+            if let Some(slot) = self.peaks.get_mut(b) {
+                *slot = (local, local_at as u32);
+            }
+            floor.add_bin(&self.power, local_at, guard);
+            if let Some(at) = top_at.filter(|_| top > best.power) {
+                best = Peak {
+                    power: top,
+                    bin: b,
+                    lag: at,
+                    neighbours: [
+                        self.power[(at + N - 1) & (N - 1)],
+                        self.power[(at + 1) & (N - 1)],
+                    ],
+                };
+            }
+        }
+        (best, floor)
+    }
+
+    /// One Doppler `doppler` over the first `K` ms: the strongest cell within one code bin of
+    /// lag `centre` with the correlation triangle's peak interpolated, and the mean
+    /// background cell (away from the bin's peak). Needs the code prepared.
+    pub(super) fn measure_at(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        doppler: f32,
+        centre: usize,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) -> (f32, f32) {
+        let grid = Grid {
+            first_hz: doppler,
+            step_hz: 0.0,
+            bins: 1,
+            first_ms: 0,
+        };
+        let window = CodeWindow { centre, half: 1 };
+        let (peak, floor) = self.scan(i, q, &grid, Some(window), config, dc);
+        let (a0, am, ap) = (
+            libm::sqrtf(peak.power),
+            libm::sqrtf(peak.neighbours[0]),
+            libm::sqrtf(peak.neighbours[1]),
+        );
+        // Triangle of half-width one chip sampled every 1023/N chips: the peak is
+        // a0 / (1 − |δ|·1023/N) for an offset of δ bins.
+        let denom = 2.0 * (a0 - am.min(ap));
+        let delta = if denom > 0.0 {
+            ((ap - am) / denom).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
+        let a = a0 / (1.0 - delta.abs() * CA_CODE_LENGTH as f32 / N as f32);
+        (a * a, floor.mean())
+    }
+
+    /// `self.power` ← the `K`-ms non-coherent sum of the correlation at Doppler `doppler`
+    /// from millisecond `first_ms`, each millisecond shifted by its code Doppler.
+    fn accumulate(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        first_ms: usize,
+        doppler: f32,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) {
+        self.power = [0.0; N];
+        for m in 0..usize::from(config.noncoherent_ms) {
+            self.decimate(i, q, first_ms + m, doppler, config, dc);
+            self.fft.transform(&mut self.data, false);
+            self.excise();
+            for (d, c) in self.data.iter_mut().zip(self.code.iter()) {
+                // X · conj(C)
+                *d = [d[0] * c[0] + d[1] * c[1], d[1] * c[0] - d[0] * c[1]];
+            }
+            self.fft.transform(&mut self.data, true);
+            // Code Doppler: ms m's lag is shifted by −m·N·f/f_L1 bins.
+            let drift = libm::round(m as f64 * N as f64 * f64::from(doppler) / GPS_L1_HZ) as i64;
+            let shift = drift.rem_euclid(N as i64) as usize;
+            for (l, p) in self.power.iter_mut().enumerate() {
+                let d = self.data[(l + N - shift) & (N - 1)];
+                *p += d[0] * d[0] + d[1] * d[1];
+            }
+        }
+    }
+
+    /// Prepares the interference handling for these samples: the tones to cancel
+    /// ([`super::tone`]) and the background line power of the spectrum after their
+    /// cancellation, for [`Acquisition::excise`] (0 for silent samples).
+    pub(super) fn prepare_interference(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) {
+        self.level = 0.0;
+        self.tone_count = 0;
+        let level = self.spectrum_level(i, q, config, dc);
+        self.level = if self.find_tones(i, q, level, config, dc) > 0 {
+            self.spectrum_level(i, q, config, dc)
+        } else {
+            level
+        };
+    }
+
+    /// The background line power of the IF-mixed spectrum of millisecond 0 (left in
+    /// `self.data`): a mean trimmed of the lines above [`EXCISION_FACTOR`] times it
+    /// ([`LEVEL_STEPS`] steps).
+    fn spectrum_level(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) -> f32 {
+        self.decimate(i, q, 0, 0.0, config, dc);
+        self.fft.transform(&mut self.data, false);
+        let mut level = f32::INFINITY;
+        for _ in 0..LEVEL_STEPS {
+            let (mut sum, mut count) = (0.0f64, 0u32);
+            for d in &self.data {
+                let p = d[0] * d[0] + d[1] * d[1];
+                if p <= EXCISION_FACTOR * level {
+                    sum += f64::from(p);
+                    count += 1;
+                }
+            }
+            level = if count > 0 {
+                (sum / f64::from(count)) as f32
+            } else {
+                0.0
+            };
+        }
+        level
+    }
+
+    /// Removes the interference lines from the spectrum in `self.data`: every local maximum
+    /// above [`EXCISION_FACTOR`] times the background level (up to [`MAX_EXCISED_LINES`],
+    /// strongest first), with the lines within `√(P/level)/π` of it (a rectangular window's
+    /// leakage `P/(πk)²` falls below the background there), at most `N/8` either side.
+    fn excise(&mut self) {
+        let level = self.level;
+        if !(level > 0.0) {
+            return;
+        }
+        let power = |d: &Complex| d[0] * d[0] + d[1] * d[1];
+        let mut lines = [(0.0f32, 0usize); MAX_EXCISED_LINES];
+        for k in 0..N {
+            let p = power(&self.data[k]);
+            let before = power(&self.data[(k + N - 1) & (N - 1)]);
+            let after = power(&self.data[(k + 1) & (N - 1)]);
+            if p > EXCISION_FACTOR * level && p >= before && p > after {
+                // Keep the strongest: replace the weakest kept line.
+                let weakest = lines.iter_mut().min_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some(w) = weakest.filter(|w| p > w.0) {
+                    *w = (p, k);
+                }
+            }
+        }
+        for &(p, k) in lines.iter().filter(|l| l.0 > 0.0) {
+            let half = libm::ceilf(libm::sqrtf(p / level) / core::f32::consts::PI) as usize;
+            let half = half.min(N / 8);
+            for j in 0..=2 * half {
+                let at = (k + N + j - half) & (N - 1);
+                if let Some(d) = self.data.get_mut(at) {
+                    *d = [0.0; 2];
+                }
+            }
+        }
+    }
+
+    /// Mixes millisecond `m` of the samples (mean `dc` and the tones removed) with the Doppler
+    /// bin's carrier and integrates it into the `N` bins of `self.data`.
+    fn decimate(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        m: usize,
+        doppler: f32,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) {
+        self.data = [[0.0; 2]; N];
+        let fs = config.sample_rate_hz;
+        let start = config.ms_start(m);
+        let end = config.ms_start(m + 1).min(i.len());
+        let step = CarrierNco::step_for(config.intermediate_frequency_hz + f64::from(doppler), fs);
+        // Bin of sample k: floor((k/f_s − m·1 ms) · N · 1000), in 32.32 fixed point.
+        let bin_step = libm::round(N as f64 * 1000.0 / fs * 4_294_967_296.0) as u64;
+        let t0 = (start as f64 / fs - m as f64 * 1e-3) * N as f64 * 1000.0;
+        let mut bin_acc = libm::round(t0 * 4_294_967_296.0) as u64;
+        let mut phase = 0u32;
+        let dq = if q.is_some() { dc[1] } else { 0.0 };
+        let tones = self.tones.get(..self.tone_count).unwrap_or(&[]);
+        let mut tone_phase = [0u32; MAX_TONES];
+        let mut phasors = [[0.0f32; 2]; MAX_TONES];
+        for ((p, a), t) in tone_phase.iter_mut().zip(phasors.iter_mut()).zip(tones) {
+            *p = t.step().wrapping_mul(start as u32);
+            *a = t.phasor(m, i, q, config, dc);
+        }
+        for k in start..end {
+            let mut x = f32::from(i.get(k).copied().unwrap_or(0)) - dc[0];
+            let mut y = q.and_then(|q| q.get(k)).map_or(0.0, |v| f32::from(*v) - dq);
+            for ((p, a), t) in tone_phase.iter_mut().zip(&phasors).zip(tones) {
+                let v = rotate(*a, *p);
+                x -= v[0];
+                if q.is_some() {
+                    y -= v[1];
+                }
+                *p = p.wrapping_add(t.step());
+            }
+            let idx = carrier_index(phase);
+            let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
+            let bin = ((bin_acc >> 32) as usize) & (N - 1);
+            let d = &mut self.data[bin];
+            d[0] += x * c + y * s;
+            d[1] += y * c - x * s;
+            phase = phase.wrapping_add(step);
+            bin_acc += bin_step;
+        }
+    }
+
+    /// Refined Doppler (Hz) and code phase (chips at the first sample) of a search peak.
+    pub(super) fn refine(&self, peak: &Peak, grid: &Grid) -> (f32, f32) {
+        // Code phase: triangle interpolation on amplitudes; lag ℓ means phase (N − ℓ)·1023/N.
+        let (a0, am, ap) = (
+            libm::sqrtf(peak.power),
+            libm::sqrtf(peak.neighbours[0]),
+            libm::sqrtf(peak.neighbours[1]),
+        );
+        let denom = 2.0 * (a0 - am.min(ap));
+        let delta = if denom > 0.0 {
+            ((ap - am) / denom).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
+        let lag = peak.lag as f32 + delta;
+        let len = CA_CODE_LENGTH as f32;
+        let mut code_phase = (N as f32 - lag) * (len / N as f32);
+        code_phase -= libm::floorf(code_phase / len) * len;
+        // Doppler: parabola through the neighbouring bins' peak amplitudes.
+        let amp = |b: usize| self.peaks.get(b).map_or(0.0, |p| libm::sqrtf(p.0));
+        let bd = peak.bin;
+        let (fm, f0, fp) = (
+            if bd > 0 { amp(bd - 1) } else { 0.0 },
+            amp(bd),
+            if bd + 1 < grid.bins { amp(bd + 1) } else { 0.0 },
+        );
+        let curv = 2.0 * f0 - fm - fp;
+        let df = if curv > 0.0 {
+            (0.5 * (fp - fm) / curv).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
+        (grid.doppler(bd) + df * grid.step_hz, code_phase)
+    }
+
+    /// The verification dwell of a candidate at `doppler` and `code_phase` (chips at the first
+    /// sample) on milliseconds `K..2K`, with the search's `effective_ms` as a ceiling.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn verify(
+        &mut self,
+        i: &[i8],
+        q: Option<&[i8]>,
+        doppler: f32,
+        code_phase: f32,
+        effective_ms: u16,
+        config: &AcquisitionConfig,
+        dc: [f32; 2],
+    ) -> Dwell {
+        if i.len() < config.samples_needed() {
+            return Dwell {
+                verification: Verification::NoSamples,
+                ..Dwell::not_tested()
+            };
+        }
+        // The code phase the candidate predicts at the dwell's first sample, as a lag.
+        let start = config.ms_start(usize::from(config.noncoherent_ms));
+        let rate = CA_CHIP_RATE_HZ * (1.0 + f64::from(doppler) / GPS_L1_HZ);
+        let len = CA_CODE_LENGTH as f64;
+        let phase = f64::from(code_phase) + start as f64 / config.sample_rate_hz * rate;
+        let phase = phase - libm::floor(phase / len) * len;
+        let centre = libm::round(N as f64 * (1.0 - phase / len)) as usize & (N - 1);
+        let half =
+            libm::ceilf(VERIFICATION_CODE_WINDOW_CHIPS * N as f32 / CA_CODE_LENGTH as f32) as usize;
+        let grid = Grid::dwell(config, doppler);
+        let (peak, floor) = self.scan(i, q, &grid, Some(CodeWindow { centre, half }), config, dc);
+        let k = floor.effective_ms(config.noncoherent_ms).min(effective_ms);
+        let cells = (DWELL_BINS * (2 * half + 1)) as f64;
+        let threshold = detection_threshold(k, cells, VERIFICATION_FALSE_ALARM);
+        let mean = floor.mean();
+        let metric = if mean > 0.0 { peak.power / mean } else { 0.0 };
+        Dwell {
+            verification: if metric > threshold {
+                Verification::Passed
+            } else {
+                Verification::Failed
+            },
+            metric,
+            threshold,
+        }
+    }
+}

@@ -1,0 +1,326 @@
+//! Cross-correlation between C/A signals: how much of a strong satellite's power one PRN's
+//! correlator picks up at a given code lag and Doppler offset, and the test of whether a
+//! detection or a tracked channel is explained by the stronger signals around it rather than
+//! by a satellite of its own.
+//!
+//! # The model
+//! A correlator for PRN `b` at code phase `τ_b` and carrier `f_b` integrating one code period
+//! over a signal of PRN `a` (code phase `τ_a`, carrier `f_a`, power `S_a` at its own
+//! correlator) sees the power `S_a · |R_ab|²` with
+//!
+//! ```text
+//! R_ab = (1/1023) Σ_{k=0}^{1022} c_a(s + k) · [(1 − u) c_b(s + k + n) + u c_b(s + k + n + 1)]
+//!                                 · e^{j2π Δf (k + ½ − frac s) / f_c}
+//! ```
+//! where `n + u = τ_b − τ_a` (integer and fractional lag, chips), `Δf = f_a − f_b`, `f_c` the
+//! chip rate and `s` the chip of code `a` at which the integration starts (`τ_a` for a search
+//! window that starts with the samples; `τ_a − τ_b` for a channel whose integration starts at
+//! its own code epoch). `|R_ab|²` is at most −23.9 dB at `Δf = 0` (the Gold codes' three
+//! values) and reaches about −21 dB at some Doppler offsets near multiples of 1 kHz, where the
+//! product `c_a · e^{j2πΔf t}` is again periodic in the code period.
+//!
+//! # The test ([`cross_correlation_source`])
+//! A victim (signal power `S_v`) is explained by the others when
+//! `S_v ≤ margin · X_v` with `X_v = Σ_j X_j + 2 Σ_{j<j' coherent} √(X_j X_j')`, `X_j = S_j ·
+//! max|R_jv|²` over the others stronger than the victim (`S_j > S_v`), the maximum taken over
+//! a small grid of lags and Doppler offsets around the nominal ones (the estimates' errors).
+//! Two others add coherently when their Doppler difference is within `coherence_hz` of a
+//! multiple of 1 kHz (their relative phase then barely turns within the integration).
+//! Bounded: `others.len()` × [`GRID_POINTS`] sums of 1023 terms, plus the pairs.
+
+use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH};
+
+/// Lag steps of the grid around the nominal lag, chips.
+pub const GRID_LAG_CHIPS: [f32; 3] = [-0.25, 0.0, 0.25];
+
+/// Doppler steps of the grid around the nominal Doppler offset, as fractions of the Doppler
+/// tolerance the caller gives.
+const GRID_DOPPLER_FRACTIONS: [f32; 3] = [-1.0, 0.0, 1.0];
+
+/// Grid points of one cross-correlation maximum.
+pub const GRID_POINTS: usize = GRID_LAG_CHIPS.len() * GRID_DOPPLER_FRACTIONS.len();
+
+/// Most other signals one test considers (satellites in view of one antenna).
+pub const MAX_OTHERS: usize = 32;
+
+/// `|R_ab|²` (see the module documentation): the fraction of code `a`'s power that a
+/// correlator of code `b` at lag `lag_chips = τ_b − τ_a` and Doppler offset
+/// `doppler_offset_hz = f_a − f_b` picks up over one code period starting at chip
+/// `start_chip_a` of code `a`. 1 for `a = b`, zero lag and offset. Bounded: 1023 terms.
+pub fn code_cross_correlation(
+    a: Prn,
+    b: Prn,
+    lag_chips: f64,
+    start_chip_a: f64,
+    doppler_offset_hz: f32,
+) -> f32 {
+    let len = CA_CODE_LENGTH as f64;
+    if !(lag_chips.is_finite() && start_chip_a.is_finite() && doppler_offset_hz.is_finite()) {
+        return 0.0;
+    }
+    let lag = lag_chips - libm::floor(lag_chips / len) * len;
+    let n = libm::floor(lag) as usize % CA_CODE_LENGTH;
+    let u = (lag - libm::floor(lag)) as f32;
+    let start = start_chip_a - libm::floor(start_chip_a / len) * len;
+    let first = libm::floor(start) as usize % CA_CODE_LENGTH;
+    let frac = (start - libm::floor(start)) as f32;
+    let (ca, cb) = (a.code_signs(), b.code_signs());
+    // Phasor per chip, and its starting value at chip centre ½ − frac.
+    let w = core::f32::consts::TAU * doppler_offset_hz / CA_CHIP_RATE_HZ as f32;
+    let (ws, wc) = (libm::sinf(w), libm::cosf(w));
+    let p0 = w * (0.5 - frac);
+    let (mut pr, mut pi) = (libm::cosf(p0), libm::sinf(p0));
+    let (mut sr, mut si) = (0.0f32, 0.0f32);
+    let mut j = first;
+    let mut jb = (first + n) % CA_CODE_LENGTH;
+    for _ in 0..CA_CODE_LENGTH {
+        let jb1 = if jb + 1 == CA_CODE_LENGTH { 0 } else { jb + 1 };
+        let x = f32::from(ca.get(j).copied().unwrap_or(1));
+        let y0 = f32::from(cb.get(jb).copied().unwrap_or(1));
+        let y1 = f32::from(cb.get(jb1).copied().unwrap_or(1));
+        let p = x * ((1.0 - u) * y0 + u * y1);
+        sr += p * pr;
+        si += p * pi;
+        let r = pr * wc - pi * ws;
+        pi = pr * ws + pi * wc;
+        pr = r;
+        j = if j + 1 == CA_CODE_LENGTH { 0 } else { j + 1 };
+        jb = jb1;
+    }
+    let scale = 1.0 / CA_CODE_LENGTH as f32;
+    (sr * sr + si * si) * scale * scale
+}
+
+/// A signal as the cross-correlation test sees it: code phase and rate at a receiver sample,
+/// Doppler, and its power at its own correlator (any unit, the same for every signal of one
+/// test, with the background removed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SignalProbe {
+    /// The satellite.
+    pub prn: Prn,
+    /// Receiver sample index the code phase refers to.
+    pub sample: u64,
+    /// Code phase at `sample`, chips in `[0, 1023)`.
+    pub code_phase_chips: f64,
+    /// Code rate, chips per sample.
+    pub code_chips_per_sample: f64,
+    /// Doppler, Hz.
+    pub doppler_hz: f32,
+    /// Signal power at its own correlator (background removed), common unit.
+    pub power: f32,
+}
+
+impl SignalProbe {
+    /// Code phase at receiver sample `sample`, chips in `[0, 1023)`.
+    pub fn code_phase_at(&self, sample: u64) -> f64 {
+        let dt = (sample as i64).wrapping_sub(self.sample as i64) as f64;
+        let c = self.code_phase_chips + dt * self.code_chips_per_sample;
+        let len = CA_CODE_LENGTH as f64;
+        c - libm::floor(c / len) * len
+    }
+}
+
+/// How the victim's integration is aligned, and how uncertain the parameters are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CrossCorrelationTest {
+    /// `true`: the integration starts at the victim's code epochs (a tracking channel);
+    /// `false`: at the victim's `sample` (an acquisition window).
+    pub epoch_aligned: bool,
+    /// Doppler uncertainty of the offsets, Hz (the grid's Doppler half-width).
+    pub doppler_tolerance_hz: f32,
+    /// Doppler difference (modulo 1 kHz) within which two others add coherently, Hz
+    /// (about one over the integration time).
+    pub coherence_hz: f32,
+    /// The victim is explained when its power is at most this times the predicted one.
+    pub margin: f32,
+}
+
+/// What the test found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CrossCorrelationVerdict {
+    /// The stronger signal that contributes most to the victim (`None`: none stronger).
+    pub strongest_source: Option<Prn>,
+    /// Predicted cross-correlation power at the victim's correlator (the victim's unit).
+    pub predicted_power: f32,
+    /// The victim's power is explained by the others (`power ≤ margin · predicted`).
+    pub explained: bool,
+}
+
+/// The largest `|R|²` of `other` into the victim over the test's grid.
+fn largest_fraction(victim: &SignalProbe, other: &SignalProbe, test: &CrossCorrelationTest) -> f32 {
+    let tau_a = other.code_phase_at(victim.sample);
+    let tau_b = victim.code_phase_chips;
+    let start = if test.epoch_aligned {
+        tau_a - tau_b
+    } else {
+        tau_a
+    };
+    let offset = other.doppler_hz - victim.doppler_hz;
+    let mut best = 0.0f32;
+    for &dl in &GRID_LAG_CHIPS {
+        for &df in &GRID_DOPPLER_FRACTIONS {
+            let r = code_cross_correlation(
+                other.prn,
+                victim.prn,
+                tau_b - tau_a + f64::from(dl),
+                start,
+                offset + df * test.doppler_tolerance_hz,
+            );
+            best = best.max(r);
+        }
+    }
+    best
+}
+
+/// Whether two Dopplers differ by nearly a multiple of 1 kHz (within `tolerance_hz`).
+pub fn near_khz_multiple(a_hz: f32, b_hz: f32, tolerance_hz: f32) -> bool {
+    let d = (a_hz - b_hz) / 1000.0;
+    (d - libm::roundf(d)).abs() * 1000.0 <= tolerance_hz
+}
+
+/// The test of the module documentation: is `victim` explained by the cross-correlation of
+/// the stronger ones among `others` (entries with the victim's PRN are skipped; at most
+/// [`MAX_OTHERS`] are considered)? Bounded: see the module documentation.
+pub fn cross_correlation_source(
+    victim: &SignalProbe,
+    others: &[SignalProbe],
+    test: &CrossCorrelationTest,
+) -> CrossCorrelationVerdict {
+    let mut contributions = [(0.0f32, 0.0f32); MAX_OTHERS]; // (X_j, Doppler)
+    let mut count = 0usize;
+    let mut strongest: Option<(Prn, f32)> = None;
+    let stronger = others
+        .iter()
+        .filter(|o| o.prn != victim.prn && o.power > victim.power && o.power.is_finite());
+    for (slot, other) in contributions.iter_mut().zip(stronger) {
+        let x = other.power * largest_fraction(victim, other, test);
+        *slot = (x, other.doppler_hz);
+        count += 1;
+        if strongest.is_none_or(|(_, s)| x > s) {
+            strongest = Some((other.prn, x));
+        }
+    }
+    let used = contributions.get(..count).unwrap_or(&[]);
+    let mut predicted: f32 = used.iter().map(|c| c.0).sum();
+    for (k, a) in used.iter().enumerate() {
+        for b in used.iter().skip(k + 1) {
+            if near_khz_multiple(a.1, b.1, test.coherence_hz) {
+                predicted += 2.0 * libm::sqrtf(a.0 * b.0);
+            }
+        }
+    }
+    CrossCorrelationVerdict {
+        strongest_source: strongest.map(|s| s.0),
+        predicted_power: predicted,
+        explained: count > 0 && victim.power <= test.margin * predicted,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::ca_code::cyclic_correlation;
+
+    fn prn(n: u8) -> Prn {
+        Prn::new(n).unwrap()
+    }
+
+    /// At zero Doppler offset and integer lags the model is the cyclic correlation of the
+    /// codes (1 for the code with itself, the Gold codes' three values otherwise), whatever
+    /// the start chip; half-chip lags average the neighbours.
+    #[test]
+    fn integer_lags_give_the_cyclic_correlation() {
+        assert!((code_cross_correlation(prn(3), prn(3), 0.0, 17.0, 0.0) - 1.0).abs() < 1e-5);
+        for lag in [0usize, 1, 100, 511, 1022] {
+            let r = cyclic_correlation(prn(1), prn(2), lag) as f32 / 1023.0;
+            let m = code_cross_correlation(prn(1), prn(2), lag as f64, 300.4, 0.0);
+            assert!((m - r * r).abs() < 1e-6, "lag {lag}: {m} vs {}", r * r);
+            assert!(r.abs() <= 65.0 / 1023.0);
+        }
+        let half = code_cross_correlation(prn(5), prn(5), 0.5, 0.0, 0.0);
+        assert!((half - 0.25).abs() < 0.01, "{half}");
+    }
+
+    /// Against a sample-level f64 correlation of the two codes with a Doppler offset (what a
+    /// correlator computes at 16 samples per chip): the chip-level model agrees.
+    #[test]
+    fn the_model_matches_a_sample_level_correlation() {
+        let per_chip = 16usize;
+        for &(a, b, lag, start, df) in &[
+            (4u8, 9u8, 37.3, 100.0, 1000.0f32),
+            (4, 9, 800.75, 5.5, 3000.0),
+            (17, 22, 12.0, 1000.2, 250.0),
+            (1, 31, 511.5, 0.0, -2000.0),
+        ] {
+            let (pa, pb) = (prn(a), prn(b));
+            let (mut sr, mut si) = (0.0f64, 0.0f64);
+            let n = 1023 * per_chip;
+            for k in 0..n {
+                let t_chips = (k as f64 + 0.5) / per_chip as f64; // chips since window start
+                let xa = start + t_chips;
+                let xb = xa + lag;
+                let ca = f64::from(pa.chip((xa.rem_euclid(1023.0)) as usize));
+                let cb = f64::from(pb.chip((xb.rem_euclid(1023.0)) as usize));
+                let ph = core::f64::consts::TAU * f64::from(df) * t_chips / 1.023e6;
+                sr += ca * cb * ph.cos();
+                si += ca * cb * ph.sin();
+            }
+            let exact = ((sr * sr + si * si) / (n * n) as f64) as f32;
+            let model = code_cross_correlation(pa, pb, lag, start, df);
+            assert!(
+                (model - exact).abs() < 2e-4 + 0.02 * exact,
+                "{a}/{b} lag {lag} df {df}: model {model}, exact {exact}"
+            );
+        }
+    }
+
+    fn probe(p: u8, tau: f64, doppler: f32, power: f32) -> SignalProbe {
+        SignalProbe {
+            prn: prn(p),
+            sample: 1000,
+            code_phase_chips: tau,
+            code_chips_per_sample: 1.023e6 / 2.6e6,
+            doppler_hz: doppler,
+            power,
+        }
+    }
+
+    const TEST: CrossCorrelationTest = CrossCorrelationTest {
+        epoch_aligned: false,
+        doppler_tolerance_hz: 100.0,
+        coherence_hz: 50.0,
+        margin: 2.0,
+    };
+
+    /// A victim at the strongest cross-correlation peak of a strong signal, with the power
+    /// that peak gives, is explained; the same victim ten times stronger, or a victim with
+    /// no stronger signal around, is not.
+    #[test]
+    fn a_victim_at_a_cross_correlation_peak_is_explained() {
+        let strong = probe(7, 100.0, 1200.0, 1.0e6);
+        // Find the victim lag with the largest |R|² at 1 kHz offset.
+        let (mut best, mut at) = (0.0f32, 0.0f64);
+        for l in 0..1023 {
+            let r = code_cross_correlation(prn(7), prn(12), f64::from(l), 100.0, 1000.0);
+            if r > best {
+                best = r;
+                at = f64::from(l);
+            }
+        }
+        assert!(best > 10f32.powf(-2.6), "{best}");
+        let victim = probe(12, (100.0 + at) % 1023.0, 200.0, 1.0e6 * best);
+        let v = cross_correlation_source(&victim, &[strong], &TEST);
+        assert!(v.explained, "{v:?}");
+        assert_eq!(v.strongest_source, Some(prn(7)));
+        let real = SignalProbe {
+            power: 10.0 * victim.power,
+            ..victim
+        };
+        assert!(!cross_correlation_source(&real, &[strong], &TEST).explained);
+        let alone = cross_correlation_source(&victim, &[], &TEST);
+        assert!(!alone.explained && alone.strongest_source.is_none());
+    }
+}
