@@ -33,7 +33,11 @@
 //!    the tree at the end of each baseline.
 //! 4. **Validation**: the best cost must pass the χ² test (99.9 %) with `M n + 3(M − 1)`
 //!    degrees of freedom, and the second-best candidate must cost at least `ratio_threshold`
-//!    times the best; otherwise the resolver refuses ([`AmbiguityError`]).
+//!    times the best; otherwise the resolver refuses ([`AmbiguityError`]). The search prunes
+//!    everything beyond `ratio_threshold × best`, so a fix without a rival inside that bound
+//!    knows only a lower bound of its ratio ([`AmbiguityFix::ratio_is_lower_bound`]); with
+//!    [`AmbiguityConfig::ratio_nodes`] a second search, whose bound shrinks only to the
+//!    second-best cost, finds the true ratio.
 //! 5. The fixed phases give range differences, solved by the snapshot solver for the attitude
 //!    and its covariance.
 //!
@@ -49,8 +53,8 @@ use nalgebra::{SMatrix, Vector3};
 use crate::ekf::{chi_square_quantile, GateConfidence};
 use crate::{real, AmbiguityError, Real, SnapshotError};
 
-use super::integer_search::{IntegerSearch, SearchFailure};
-use super::lambda::decorrelate;
+use super::integer_search::{Candidate, IntegerSearch, SearchFailure, SearchOutcome};
+use super::lambda::{decorrelate, Decorrelation};
 use super::range_model::{los_normal_matrix, RangeDifferences, SatelliteRanges};
 pub use super::range_model::{PhaseObservations, PhaseSatellite};
 use super::snapshot::{SnapshotSolution, SnapshotSolver};
@@ -82,12 +86,17 @@ pub struct AmbiguityConfig<T = f32> {
     pub ratio_threshold: T,
     /// Node budget of the integer search; exhausted → [`AmbiguityError::SearchBudgetExhausted`].
     pub max_nodes: u32,
+    /// Node budget of a second search that finds the true ratio when the first pruned every
+    /// rival beyond the ratio threshold (0: no second search; the ratio is then reported as a
+    /// lower bound, [`AmbiguityFix::ratio_is_lower_bound`]).
+    pub ratio_nodes: u32,
     /// Constrained (flight) or unconstrained (comparison) search.
     pub mode: SearchMode,
 }
 
 impl<T: Real> AmbiguityConfig<T> {
-    /// GPS L1 with the given SD noise levels (metres), ratio 3, 20 000 nodes, constrained.
+    /// GPS L1 with the given SD noise levels (metres), ratio 3, 20 000 nodes, constrained, no
+    /// second search for the true ratio.
     pub fn gps_l1(phase_sigma_m: T, code_sigma_m: T) -> Self {
         Self {
             wavelength_m: real(GPS_L1_WAVELENGTH_M),
@@ -95,6 +104,7 @@ impl<T: Real> AmbiguityConfig<T> {
             code_sigma_m,
             ratio_threshold: real(3.0),
             max_nodes: 20_000,
+            ratio_nodes: 0,
             mode: SearchMode::Constrained,
         }
     }
@@ -112,8 +122,13 @@ pub struct AmbiguityFix<const M: usize, const N: usize, T = f32> {
     pub cost: T,
     /// Cost of the second-best candidate, or the final search bound when none was inside it.
     pub second_cost: T,
-    /// `second_cost / cost`.
+    /// `second_cost / cost`: the ratio test's statistic.
     pub ratio: T,
+    /// No second candidate was found inside the search bound (the search prunes everything
+    /// beyond `ratio_threshold × best`, and [`AmbiguityConfig::ratio_nodes`] did not find one
+    /// inside the initial bound): `ratio` is then a lower bound of the true ratio (at least
+    /// the threshold), not its value.
+    pub ratio_is_lower_bound: bool,
     /// Search tree nodes visited.
     pub nodes: u32,
     /// Full candidates evaluated (each a Wahba + Gauss–Newton fit when constrained).
@@ -162,8 +177,9 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         &self.config
     }
 
-    /// Resolves the ambiguities of one epoch and solves the attitude.
-    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
+    /// Resolves the ambiguities of one epoch and solves the attitude: the float solution, the
+    /// LAMBDA decorrelation, the integer search, the validation, the fix (the steps of the
+    /// module documentation).
     ///
     /// # Errors
     /// [`AmbiguityError::Input`] for too few satellites or coplanar lines of sight;
@@ -177,21 +193,72 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         // by satellite cannot panic.)
         let n = obs.satellites().len().min(N);
         let sats = obs.satellites().get(..n).unwrap_or(&[]);
+        let float = self.float_solution(sats)?;
+        let dec = decorrelate(&float.q1, n)?;
+        let model =
+            ConditionalBaselines::new(&float, &dec, sats, self.config.wavelength_m, self.weights());
+        let sigma_b = self.solver.correlation().matrix();
+        let (l_b, d_b) = ldlt_small(sigma_b).ok_or(SnapshotError::InvalidCorrelation)?;
+        let constrained = self.config.mode == SearchMode::Constrained;
+        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
+        let gate: T = real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(1e9));
+        let search = IntegerSearch {
+            dec: &dec,
+            zhat: model.zhat,
+            l_b,
+            d_b,
+            initial_bound: gate * self.config.ratio_threshold,
+            ratio: self.config.ratio_threshold,
+            max_nodes: self.config.max_nodes,
+        };
+        let outcome = self.search(&search, &model, &float)?;
+        let verdict = self.validate(&outcome, gate)?;
+        let verdict = if verdict.lower_bound && self.config.ratio_nodes > 0 {
+            self.true_ratio(&search, &model, &float, verdict)
+        } else {
+            verdict
+        };
+        let best = outcome.best.first().ok_or(AmbiguityError::NoCandidate)?;
+        let (ambiguities, solution) = self.fix(sats, &float, &dec, best)?;
+        Ok(AmbiguityFix {
+            ambiguities,
+            solution,
+            cost: best.cost,
+            second_cost: verdict.second_cost,
+            ratio: verdict.ratio,
+            ratio_is_lower_bound: verdict.lower_bound,
+            nodes: outcome.nodes + verdict.extra_nodes,
+            candidates: outcome.evaluated + verdict.extra_candidates,
+        })
+    }
+
+    /// Phase and code weights `(κ_φ, κ_p, κ)` (1/m²).
+    fn weights(&self) -> (T, T, T) {
         let cfg = &self.config;
-        let lambda = cfg.wavelength_m;
-        let (var_phi, var_code) = (
-            cfg.phase_sigma_m * cfg.phase_sigma_m,
-            cfg.code_sigma_m * cfg.code_sigma_m,
-        );
-        let (k_phi, k_code) = (T::one() / var_phi, T::one() / var_code);
-        let kappa = k_phi + k_code;
+        let k_phi = T::one() / (cfg.phase_sigma_m * cfg.phase_sigma_m);
+        let k_code = T::one() / (cfg.code_sigma_m * cfg.code_sigma_m);
+        (k_phi, k_code, k_phi + k_code)
+    }
+
+    /// Step 1, the float solution: `â_i = N⁻¹ S W p_i`, `ẑ_ij = φ_ij − s_j·â_i / λ` (shifted by
+    /// `round(ẑ)`), the conditional baselines at the shift, and `Q₁`.
+    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
+    fn float_solution<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+    ) -> Result<FloatSolution<M, N, T>, AmbiguityError> {
+        let lambda = self.config.wavelength_m;
+        let (k_phi, k_code, kappa) = self.weights();
         let (info, info_inv) =
             los_normal_matrix(sats.iter().map(|s| (s.los, T::one() / s.cofactor)))?;
-
-        // 1. Float solution: â_i = N⁻¹ S W p_i ; ẑ_ij = φ_ij − s_j·â_i / λ, shifted by round(ẑ)
-        let mut shift = [[T::zero(); N]; M];
-        let mut zfloat = [[T::zero(); N]; M];
-        let mut a_shift = [Vector3::<T>::zeros(); M];
+        let mut f = FloatSolution {
+            shift: [[T::zero(); N]; M],
+            zfloat: [[T::zero(); N]; M],
+            a_shift: [Vector3::<T>::zeros(); M],
+            info,
+            info_inv,
+            q1: SMatrix::<T, N, N>::identity(),
+        };
         for i in 0..M {
             let mut rhs = Vector3::zeros();
             for s in sats {
@@ -199,22 +266,19 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
             }
             let a_code = info_inv * rhs;
             let mut rhs_fixed = Vector3::zeros();
-            for (j, s) in sats.iter().enumerate() {
-                if j >= N {
-                    break;
-                }
+            for (j, s) in sats.iter().enumerate().take(N) {
                 let zf = s.phase_cycles[i] - s.los.dot(&a_code) / lambda;
                 let sh = zf.round();
-                shift[i][j] = sh;
-                zfloat[i][j] = zf - sh;
+                f.shift[i][j] = sh;
+                f.zfloat[i][j] = zf - sh;
                 // ǎ_i at z = shift: N⁻¹ S W (κ_φ λ(φ − shift) + κ_p p) / κ
                 let r = (k_phi * lambda * (s.phase_cycles[i] - sh) + k_code * s.code_m[i]) / kappa;
                 rhs_fixed += s.los * (r / s.cofactor);
             }
-            a_shift[i] = info_inv * rhs_fixed;
+            f.a_shift[i] = info_inv * rhs_fixed;
         }
         // Q₁ = (σ_φ² W⁻¹ + σ_p² Sᵀ N⁻¹ S) / λ²
-        let mut q1 = SMatrix::<T, N, N>::identity();
+        let (var_phi, var_code) = (T::one() / k_phi, T::one() / k_code);
         let l2 = lambda * lambda;
         for (j, sj) in sats.iter().enumerate().take(N) {
             for (l, sl) in sats.iter().enumerate().take(N) {
@@ -222,58 +286,27 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                 if j == l {
                     v += var_phi * sj.cofactor;
                 }
-                q1[(j, l)] = v / l2;
+                f.q1[(j, l)] = v / l2;
             }
         }
-        // 2. LAMBDA decorrelation, ẑ' = Zᵀ ẑ
-        let dec = decorrelate(&q1, n)?;
-        let mut zhat = [[T::zero(); N]; M];
-        for i in 0..M {
-            for c in 0..n {
-                let mut v = T::zero();
-                for j in 0..n {
-                    v += dec.z[(j, c)] * zfloat[i][j];
-                }
-                zhat[i][c] = v;
-            }
-        }
-        // ǎ_i(z') = ǎ_i(shift) − T_a z'_i, T_a = (λ κ_φ / κ) N⁻¹ S W Z⁻ᵀ
-        let mut t_a = [Vector3::<T>::zeros(); N];
-        for (c, col) in t_a.iter_mut().enumerate().take(n) {
-            let mut v = Vector3::zeros();
-            for (j, s) in sats.iter().enumerate().take(N) {
-                v += s.los * (dec.z_inv_t[(j, c)] / s.cofactor);
-            }
-            *col = info_inv * v * (lambda * k_phi / kappa);
-        }
-        let conditional = |i: usize, z: &[T; N]| -> Vector3<T> {
-            let mut a = a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
-            for (t, &zc) in t_a.iter().zip(z.iter()).take(n) {
-                a -= t * zc;
-            }
-            a
-        };
-        // Σ_B = L_B D_B L_Bᵀ (forward LDLᵀ)
-        let sigma_b = self.solver.correlation().matrix();
-        let (l_b, d_b) = ldlt_small(sigma_b).ok_or(SnapshotError::InvalidCorrelation)?;
+        Ok(f)
+    }
 
-        // 3. Search
-        let constrained = cfg.mode == SearchMode::Constrained;
-        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
-        let gate: T = real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(1e9));
-        let search = IntegerSearch {
-            dec: &dec,
-            zhat,
-            l_b,
-            d_b,
-            initial_bound: gate * cfg.ratio_threshold,
-            ratio: cfg.ratio_threshold,
-            max_nodes: cfg.max_nodes,
-        };
+    /// Step 3, the integer search with the constraint terms (the baseline-length bound at the
+    /// end of each baseline, the rotation fit of a full candidate), or without them.
+    fn search<const N: usize>(
+        &self,
+        search: &IntegerSearch<'_, M, N, T>,
+        model: &ConditionalBaselines<M, N, T>,
+        float: &FloatSolution<M, N, T>,
+    ) -> Result<SearchOutcome<M, N, T>, AmbiguityError> {
+        let constrained = self.config.mode == SearchMode::Constrained;
+        let sigma_b = self.solver.correlation().matrix();
         let lengths = self.solver.baselines().as_array().map(|b| b.norm());
-        let length_var = info_inv.trace() / kappa;
-        let fit_info = info * kappa;
-        let outcome = search
+        let (_, _, kappa) = self.weights();
+        let length_var = float.info_inv.trace() / kappa;
+        let fit_info = float.info * kappa;
+        search
             .run(
                 |i, z| {
                     if !constrained {
@@ -284,7 +317,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                     else {
                         return T::zero();
                     };
-                    let d = conditional(i, z).norm() - length;
+                    let d = model.at(i, z).norm() - length;
                     d * d / (var_i * length_var)
                 },
                 |z| {
@@ -293,7 +326,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                     }
                     let mut a = [Vector3::zeros(); M];
                     for (i, (ai, zi)) in a.iter_mut().zip(z.iter()).enumerate() {
-                        *ai = conditional(i, zi);
+                        *ai = model.at(i, zi);
                     }
                     self.solver
                         .fit_reference_baselines(&a, &fit_info)
@@ -304,11 +337,20 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
             .map_err(|f| match f {
                 SearchFailure::Budget => AmbiguityError::SearchBudgetExhausted,
                 SearchFailure::Input(e) => AmbiguityError::Input(e),
-            })?;
+            })
+    }
 
-        // 4. Validation
+    /// Step 4, the validation: the χ² test of the best, the ratio test against the second.
+    /// Without a second candidate inside the search bound the ratio is `bound / best`, a lower
+    /// bound of the true one.
+    fn validate<const N: usize>(
+        &self,
+        outcome: &SearchOutcome<M, N, T>,
+        gate: T,
+    ) -> Result<RatioVerdict<T>, AmbiguityError> {
         let best = outcome.best.first().ok_or(AmbiguityError::NoCandidate)?;
-        let second_cost = outcome.best.get(1).map(|c| c.cost).unwrap_or(outcome.bound);
+        let second = outcome.best.get(1).map(|c| c.cost);
+        let second_cost = second.unwrap_or(outcome.bound);
         let tiny = T::default_epsilon();
         let ratio = second_cost / if best.cost > tiny { best.cost } else { tiny };
         if !(best.cost <= gate) {
@@ -316,25 +358,75 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         }
         // Ambiguous when a second candidate was found below `threshold × best`. (When none was
         // found, `second_cost` is the search bound, at least `threshold × best` up to rounding.)
-        let rival = outcome
-            .best
-            .get(1)
-            .is_some_and(|c| c.cost < best.cost * cfg.ratio_threshold);
+        let rival = second.is_some_and(|c| c < best.cost * self.config.ratio_threshold);
         if rival || !ratio.is_finite() {
             return Err(AmbiguityError::Ambiguous);
         }
+        Ok(RatioVerdict {
+            second_cost,
+            ratio,
+            lower_bound: second.is_none(),
+            extra_nodes: 0,
+            extra_candidates: 0,
+        })
+    }
 
-        // 5. Fixed ambiguities z = shift + Z⁻ᵀ z', range differences, attitude
+    /// The true ratio of a validated fix whose search pruned every rival beyond the ratio
+    /// threshold: the search again with the bound shrinking only to the second-best cost
+    /// (within [`AmbiguityConfig::ratio_nodes`] nodes). Keeps the lower bound when the budget
+    /// runs out or no second candidate lies inside the initial bound.
+    fn true_ratio<const N: usize>(
+        &self,
+        search: &IntegerSearch<'_, M, N, T>,
+        model: &ConditionalBaselines<M, N, T>,
+        float: &FloatSolution<M, N, T>,
+        verdict: RatioVerdict<T>,
+    ) -> RatioVerdict<T> {
+        let wide = IntegerSearch {
+            ratio: real(1e30),
+            max_nodes: self.config.ratio_nodes,
+            ..*search
+        };
+        let Ok(outcome) = self.search(&wide, model, float) else {
+            return verdict;
+        };
+        let (Some(best), Some(second)) = (outcome.best.first(), outcome.best.get(1)) else {
+            return RatioVerdict {
+                extra_nodes: outcome.nodes,
+                extra_candidates: outcome.evaluated,
+                ..verdict
+            };
+        };
+        let tiny = T::default_epsilon();
+        RatioVerdict {
+            second_cost: second.cost,
+            ratio: second.cost / if best.cost > tiny { best.cost } else { tiny },
+            lower_bound: false,
+            extra_nodes: outcome.nodes,
+            extra_candidates: outcome.evaluated,
+        }
+    }
+
+    /// Step 5, the fix: `z = shift + Z⁻ᵀ z'`, the range differences of the fixed phases, the
+    /// attitude.
+    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
+    fn fix<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        float: &FloatSolution<M, N, T>,
+        dec: &Decorrelation<N, T>,
+        best: &Candidate<M, N, T>,
+    ) -> Result<([[i32; N]; M], SnapshotSolution<T>), AmbiguityError> {
+        let lambda = self.config.wavelength_m;
+        let (k_phi, k_code, kappa) = self.weights();
+        let n = dec.n.min(N);
         let mut ambiguities = [[0i32; N]; M];
         let mut ranges = RangeDifferences::<M, N, T>::new();
         let sigma_fixed = |c: T| (c / kappa).sqrt();
-        for (j, s) in sats.iter().enumerate() {
-            if j >= N {
-                break;
-            }
+        for (j, s) in sats.iter().enumerate().take(N) {
             let mut range_diff = [T::zero(); M];
             for i in 0..M {
-                let mut zij = shift[i][j];
+                let mut zij = float.shift[i][j];
                 for c in 0..n {
                     zij += dec.z_inv_t[(j, c)] * best.z[i][c];
                 }
@@ -350,16 +442,86 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
             })?;
         }
         let solution = self.solver.solve(&ranges)?;
-        Ok(AmbiguityFix {
-            ambiguities,
-            solution,
-            cost: best.cost,
-            second_cost,
-            ratio,
-            nodes: outcome.nodes,
-            candidates: outcome.evaluated,
-        })
+        Ok((ambiguities, solution))
     }
+}
+
+/// The float solution of step 1.
+struct FloatSolution<const M: usize, const N: usize, T> {
+    /// `round(ẑ)` per baseline and satellite, cycles.
+    shift: [[T; N]; M],
+    /// `ẑ − shift`, cycles.
+    zfloat: [[T; N]; M],
+    /// Conditional baselines at `z = shift`, reference frame, m.
+    a_shift: [Vector3<T>; M],
+    /// `N = S W Sᵀ` and its inverse.
+    info: nalgebra::Matrix3<T>,
+    info_inv: nalgebra::Matrix3<T>,
+    /// `Q₁`, cycles².
+    q1: SMatrix<T, N, N>,
+}
+
+/// Step 2's products: the decorrelated floats `ẑ' = Zᵀ ẑ` and the conditional baselines as a
+/// function of the decorrelated integers, `ǎ_i(z') = ǎ_i(shift) − T_a z'_i` with
+/// `T_a = (λ κ_φ / κ) N⁻¹ S W Z⁻ᵀ`.
+struct ConditionalBaselines<const M: usize, const N: usize, T> {
+    zhat: [[T; N]; M],
+    a_shift: [Vector3<T>; M],
+    t_a: [Vector3<T>; N],
+    n: usize,
+}
+
+impl<const M: usize, const N: usize, T: Real> ConditionalBaselines<M, N, T> {
+    fn new(
+        float: &FloatSolution<M, N, T>,
+        dec: &Decorrelation<N, T>,
+        sats: &[PhaseSatellite<M, T>],
+        lambda: T,
+        (k_phi, _, kappa): (T, T, T),
+    ) -> Self {
+        let n = dec.n.min(N);
+        let mut zhat = [[T::zero(); N]; M];
+        for (zh, zf) in zhat.iter_mut().zip(float.zfloat.iter()) {
+            for (c, v) in zh.iter_mut().enumerate().take(n) {
+                *v = (0..n)
+                    .map(|j| dec.z[(j, c)] * zf[j])
+                    .fold(T::zero(), |a, b| a + b);
+            }
+        }
+        let mut t_a = [Vector3::<T>::zeros(); N];
+        for (c, col) in t_a.iter_mut().enumerate().take(n) {
+            let mut v = Vector3::zeros();
+            for (j, s) in sats.iter().enumerate().take(N) {
+                v += s.los * (dec.z_inv_t[(j, c)] / s.cofactor);
+            }
+            *col = float.info_inv * v * (lambda * k_phi / kappa);
+        }
+        Self {
+            zhat,
+            a_shift: float.a_shift,
+            t_a,
+            n,
+        }
+    }
+
+    /// `ǎ_i(z')` for baseline `i`'s decorrelated integers.
+    fn at(&self, i: usize, z: &[T; N]) -> Vector3<T> {
+        let mut a = self.a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
+        for (t, &zc) in self.t_a.iter().zip(z.iter()).take(self.n) {
+            a -= t * zc;
+        }
+        a
+    }
+}
+
+/// The ratio test's figures.
+#[derive(Clone, Copy)]
+struct RatioVerdict<T> {
+    second_cost: T,
+    ratio: T,
+    lower_bound: bool,
+    extra_nodes: u32,
+    extra_candidates: u32,
 }
 
 /// Forward `LDLᵀ` of a small SPD matrix: `A = L D Lᵀ`, `L` unit lower triangular.
@@ -392,4 +554,100 @@ fn to_i32<T: Real>(x: T) -> i32 {
         .filter(|v| v.is_finite())
         .map(|v| v as i32)
         .unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::attitude::example;
+    use std::eprintln;
+
+    fn resolver_f64(ratio_nodes: u32) -> AmbiguityResolver<2, f64> {
+        let b = example::baselines().unwrap();
+        let baselines =
+            crate::attitude::range_model::Baselines::new(b.as_array().map(|v| v.cast::<f64>()))
+                .unwrap();
+        let solver = SnapshotSolver::new(
+            baselines,
+            crate::attitude::range_model::BaselineCorrelation::shared_base_antenna(),
+        );
+        let config = AmbiguityConfig {
+            ratio_nodes,
+            ..AmbiguityConfig::gps_l1(
+                f64::from(example::PHASE_SIGMA_M),
+                f64::from(example::CODE_SIGMA_M),
+            )
+        };
+        AmbiguityResolver::new(solver, config).unwrap()
+    }
+
+    fn obs_f64(n: usize, seed: u64) -> PhaseObservations<2, 12, f64> {
+        let o = example::phases(n, seed).unwrap();
+        let mut out = PhaseObservations::new();
+        for s in o.satellites() {
+            out.push(PhaseSatellite {
+                id: s.id,
+                los: s.los.cast(),
+                phase_cycles: s.phase_cycles.map(f64::from),
+                code_m: s.code_m.map(f64::from),
+                cofactor: f64::from(s.cofactor),
+            })
+            .unwrap();
+        }
+        out
+    }
+
+    /// Without the second search a fix whose search pruned every rival reports the threshold
+    /// as a lower bound, flagged; with it, the true ratio (above the bound), agreeing with the
+    /// f64 resolver's; the fix itself is the same.
+    #[test]
+    fn the_ratio_is_the_true_one_or_flagged_as_a_lower_bound() {
+        let mut lower_bounds = 0;
+        for seed in 1..=6u64 {
+            for n in [5usize, 6, 8] {
+                let obs = example::phases(n, seed).unwrap();
+                let plain = example::resolver().unwrap();
+                let Ok(first) = plain.resolve(&obs) else {
+                    continue;
+                };
+                let mut config = *plain.config();
+                config.ratio_nodes = 200_000;
+                let full = AmbiguityResolver::new(example::solver().unwrap(), config).unwrap();
+                let fix = full.resolve(&obs).unwrap();
+                assert_eq!(fix.ambiguities, first.ambiguities);
+                if first.ratio_is_lower_bound {
+                    lower_bounds += 1;
+                    assert!((first.ratio - 3.0).abs() < 1e-3, "{}", first.ratio);
+                    if !fix.ratio_is_lower_bound {
+                        assert!(
+                            fix.ratio >= first.ratio * 0.999,
+                            "{} < {}",
+                            fix.ratio,
+                            first.ratio
+                        );
+                    }
+                } else {
+                    assert_eq!(fix.ratio, first.ratio);
+                }
+                let reference = resolver_f64(200_000).resolve(&obs_f64(n, seed)).unwrap();
+                assert_eq!(reference.ratio_is_lower_bound, fix.ratio_is_lower_bound);
+                let err = (f64::from(fix.ratio) - reference.ratio).abs() / reference.ratio;
+                assert!(
+                    err < 2e-3,
+                    "n {n} seed {seed}: {} vs {}",
+                    fix.ratio,
+                    reference.ratio
+                );
+                eprintln!(
+                    "n {n} seed {seed}: ratio {:.2} (first search: {:.2}, lower bound {}), nodes {} vs {}",
+                    fix.ratio, first.ratio, first.ratio_is_lower_bound, fix.nodes, first.nodes
+                );
+            }
+        }
+        assert!(
+            lower_bounds > 0,
+            "no fix pruned every rival: the test tests nothing"
+        );
+    }
 }

@@ -91,6 +91,10 @@ pub struct PhantomLock {
     pub forced: usize,
     /// Total lock time of those, s.
     pub forced_lock_s: f64,
+    /// Of those, released as cross-correlations.
+    pub forced_released: usize,
+    /// Latest first release of those after the start, s.
+    pub forced_release_s_max: f64,
     /// Every present satellite reports a finite C/N0.
     pub cn0_finite: bool,
 }
@@ -144,6 +148,14 @@ fn with(spec: SynthSpec, overlay: Overlay) -> SynthSpec {
     SynthSpec {
         overlays: vec![overlay],
         ..spec
+    }
+}
+
+/// A tone 3.7 kHz from the band centre, `jn_db` over the noise level.
+fn tone(jn_db: f64) -> Overlay {
+    Overlay::Cw {
+        offset_hz: 3_700.0,
+        jn_db,
     }
 }
 
@@ -250,28 +262,24 @@ fn cases(opts: &StatsOptions) -> Vec<Case> {
             n,
         ),
         case(
-            "continuous-wave tone alone (+3.7 kHz, 20 dB over the noise level), CS8",
+            "continuous-wave tone alone (+3.7 kHz, 20 dB over the noise level, clipped by CS8)",
             SynthSpec {
-                overlays: vec![
-                    silent,
-                    Overlay::Cw {
-                        offset_hz: 3_700.0,
-                        jn_db: 20.0,
-                    },
-                ],
+                overlays: vec![silent, tone(20.0)],
                 ..base("cs8", 1, false)
             },
             1,
         ),
         case(
-            "continuous-wave tone (+3.7 kHz, J/N 0 dB) on thermal noise, 8 satellites at 45-50 dB-Hz",
-            with(
-                spread(base("cs8", 8, true), 45.0, 50.0),
-                Overlay::Cw {
-                    offset_hz: 3_700.0,
-                    jn_db: 0.0,
-                },
-            ),
+            "continuous-wave tone alone (+3.7 kHz, 30 dB over the noise level, hard-limited)",
+            SynthSpec {
+                overlays: vec![silent, tone(30.0)],
+                ..base("cs8", 1, false)
+            },
+            1,
+        ),
+        case(
+            "continuous-wave tone (+3.7 kHz, J/N 10 dB) on thermal noise, 8 satellites at 40-50 dB-Hz",
+            with(spread(base("cs8", 8, true), 40.0, 50.0), tone(10.0)),
             n,
         ),
     ]
@@ -362,13 +370,20 @@ fn phantom_lock(opts: &StatsOptions) -> Result<PhantomLock> {
             ..TrackOptions::default()
         },
     )?;
-    let forced_lock_s = forced_run
+    let forced_sats: Vec<_> = forced_run
         .report
         .satellites
         .iter()
         .filter(|s| forced.contains(&s.prn))
+        .collect();
+    let forced_lock_s = forced_sats
+        .iter()
         .map(|s| s.lock_time_s)
-        .sum();
+        .fold(0.0, |a, b| a + b);
+    let releases: Vec<f64> = forced_sats
+        .iter()
+        .filter_map(|s| s.first_cross_correlation_release_s)
+        .collect();
     let real = run.report.satellites.iter().filter(|s| !absent(s.prn));
     Ok(PhantomLock {
         name: format!(
@@ -379,13 +394,18 @@ fn phantom_lock(opts: &StatsOptions) -> Result<PhantomLock> {
         present: present.len(),
         present_held: real.clone().filter(|s| s.held_to_end).count(),
         phantoms_tracked: phantoms.len(),
-        phantom_lock_s: phantoms.iter().map(|s| s.lock_time_s).sum(),
+        phantom_lock_s: phantoms
+            .iter()
+            .map(|s| s.lock_time_s)
+            .fold(0.0, |a, b| a + b),
         phantom_longest_s: phantoms
             .iter()
             .map(|s| s.longest_lock_s)
             .fold(0.0, f64::max),
         forced: forced.len(),
         forced_lock_s,
+        forced_released: releases.len(),
+        forced_release_s_max: releases.iter().copied().fold(0.0, f64::max),
         cn0_finite: real.clone().all(|s| s.cn0_dbhz_mean.is_finite()),
     })
 }
@@ -496,7 +516,7 @@ pub fn markdown(r: &StatsReport, date: &str, commit: &str) -> String {
     }
     let p = &r.phantom_lock;
     s.push_str(&format!(
-        "\n## Phantom lock in `host-sim track`\n\n{}: {} of {} satellites held to the end; {} absent PRNs tracked, {:.1} s of phantom lock in total (longest {:.1} s). With the {} absent PRNs of highest search metric handed over on purpose: {:.1} s of lock in total. Finite C/N0 for every present satellite: {}.\n",
+        "\n## Phantom lock in `host-sim track`\n\n{}: {} of {} satellites held to the end; {} absent PRNs tracked, {:.1} s of phantom lock in total (longest {:.1} s). With the {} absent PRNs of highest search metric handed over on purpose (no re-acquisition): {:.1} s of lock in total, {} released themselves as cross-correlations, the last after {:.3} s. Finite C/N0 for every present satellite: {}.\n",
         p.name,
         p.present_held,
         p.present,
@@ -505,6 +525,8 @@ pub fn markdown(r: &StatsReport, date: &str, commit: &str) -> String {
         p.phantom_longest_s,
         p.forced,
         p.forced_lock_s,
+        p.forced_released,
+        p.forced_release_s_max,
         if p.cn0_finite { "yes" } else { "no" }
     ));
     s

@@ -144,8 +144,12 @@ pub struct WindowAttitude {
     pub satellites: Vec<u8>,
     /// The resolver's refusal or the reason no solution was tried (`None`: fixed).
     pub refused: Option<String>,
-    /// Ratio of the second-best to the best candidate's cost.
+    /// Ratio of the second-best to the best candidate's cost (a lower bound when
+    /// `ratio_lower_bound`).
     pub ratio: Option<f64>,
+    /// No second candidate was found inside the search bound (the bound shrinks to the
+    /// second-best cost in a second search of `max_nodes` nodes): `ratio` is a lower bound.
+    pub ratio_lower_bound: Option<bool>,
     /// 3-2-1 yaw, pitch, roll (body to NED), degrees.
     pub ypr_deg: Option<[f64; 3]>,
     /// Their standard deviations, degrees.
@@ -286,6 +290,7 @@ impl AttitudeSolver {
             satellites: rows.iter().map(|r| r.0).collect(),
             refused: None,
             ratio: None,
+            ratio_lower_bound: None,
             ypr_deg: None,
             ypr_sigma_deg: None,
             residual_rms_mm: None,
@@ -316,12 +321,15 @@ impl AttitudeSolver {
             best_p.max(CODE_SIGMA_FLOOR_M) as f32,
         );
         cfg.max_nodes = 500_000;
+        // The true ratio, not the threshold the first search pruned at.
+        cfg.ratio_nodes = cfg.max_nodes;
         let resolver = AmbiguityResolver::new(self.snapshot, cfg)
             .map_err(|e| anyhow::anyhow!("ambiguity resolver: {e}"))?;
         match resolver.resolve(&obs) {
             Ok(fix) => {
                 let e = fix.solution.euler;
                 out.ratio = Some(f64::from(fix.ratio));
+                out.ratio_lower_bound = Some(fix.ratio_is_lower_bound);
                 out.ypr_deg = Some([e.yaw, e.pitch, e.roll].map(|a| f64::from(a).to_degrees()));
                 out.ypr_sigma_deg = fix
                     .solution

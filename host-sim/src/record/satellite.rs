@@ -68,6 +68,8 @@ pub struct SatelliteReport {
     pub cn0_quantization_limited: bool,
     /// Times the channel released itself as another satellite's cross-correlation.
     pub cross_correlation_releases: u32,
+    /// When it first did, s (`None`: never).
+    pub first_cross_correlation_release_s: Option<f64>,
 }
 
 /// The running state of one satellite (the companion of its channel).
@@ -100,6 +102,7 @@ pub struct SatTrack {
     cn0_estimate: Cn0Estimate,
     cn0_quantization_limited: bool,
     cross_correlation_releases: u32,
+    first_release: Option<f64>,
     /// Phase and code sums of the attitude windows.
     pub phases: Option<PhaseAccumulator>,
 }
@@ -130,6 +133,7 @@ impl SatTrack {
             cn0_estimate: Cn0Estimate::default(),
             cn0_quantization_limited: false,
             cross_correlation_releases: 0,
+            first_release: None,
             phases,
         }
     }
@@ -146,7 +150,8 @@ impl SatTrack {
 
     /// Stops the satellite after its channel released itself as a cross-correlation; it is
     /// searched again from `retry_at` (s).
-    pub(super) fn release_as_cross_correlation(&mut self, retry_at: f64) {
+    pub(super) fn release_as_cross_correlation(&mut self, now: f64, retry_at: f64) {
+        self.first_release.get_or_insert(now);
         self.active = false;
         self.retry_at = retry_at;
         self.cross_correlation_releases += 1;
@@ -320,6 +325,7 @@ impl SatTrack {
             cn0_short_window: short,
             cn0_quantization_limited: self.cn0_quantization_limited,
             cross_correlation_releases: self.cross_correlation_releases,
+            first_cross_correlation_release_s: self.first_release,
         }
     }
 
@@ -341,8 +347,10 @@ pub const CA_SPECTRAL_SEPARATION_PER_HZ: f64 = 2.0 / (3.0 * gnss_attitude::signa
 /// separation coefficient, `κ` = [`CA_SPECTRAL_SEPARATION_PER_HZ`]). Solved for the thermal
 /// values by a fixed-point iteration (10 steps; it contracts by `κ Σ C/N0 ≪ 1`). Satellites
 /// that are not tracked are not in the sum; a band-limited front end has a somewhat smaller
-/// `κ`.
+/// `κ`. Capped at the core's largest C/N0 (99 dB-Hz): without thermal noise (a noise-free
+/// recording) the measured noise is all cross-correlation and the thermal C/N0 unbounded.
 pub fn mai_corrected_cn0(measured_dbhz: &[f64]) -> Vec<f64> {
+    const MAX_CN0: f64 = gnss_attitude::tracking::cn0::MAX_CN0_DBHZ as f64;
     let kappa = CA_SPECTRAL_SEPARATION_PER_HZ;
     let x: Vec<f64> = measured_dbhz
         .iter()
@@ -368,7 +376,7 @@ pub fn mai_corrected_cn0(measured_dbhz: &[f64]) -> Vec<f64> {
         .zip(thermal)
         .map(|(m, t)| {
             if m.is_finite() {
-                10.0 * t.log10()
+                (10.0 * t.log10()).min(MAX_CN0)
             } else {
                 f64::NAN
             }

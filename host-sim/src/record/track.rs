@@ -279,7 +279,7 @@ fn release_cross_correlations<const A: usize>(channels: &mut [(Channel<A>, SatTr
     for (ch, s) in channels.iter_mut().filter(|(_, s)| s.active) {
         s.note_cn0(ch.cn0_estimate());
         if ch.check_cross_correlation(&probes).is_some() {
-            s.release_as_cross_correlation(now + RETRY_EVERY_S);
+            s.release_as_cross_correlation(now, now + RETRY_EVERY_S);
         }
     }
 }
