@@ -115,8 +115,9 @@ pub struct Cn0Estimate {
     pub window_s: f32,
     /// From a long (C/N0) window rather than a short lock window.
     pub long_window: bool,
-    /// The noise tap read less than the samples' quantization allows: the floor was used (a
-    /// noise-free recording; the C/N0 is then the signal over the quantization noise).
+    /// The noise tap read no more than the samples' quantization explains (a noise-free
+    /// recording): the C/N0 is the signal over the rounding noise, the floor used when the
+    /// tap read less ([`super::cn0::QUANTIZATION_MARGIN`]).
     pub quantization_limited: bool,
 }
 

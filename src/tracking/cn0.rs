@@ -22,8 +22,10 @@
 //! `1/12` LSB² per component and sample, so the noise tap cannot honestly read less than
 //! `127² · n · c / 12` per epoch of `n` samples (`c` = 2 components for complex samples, 1 for
 //! real; 127 the carrier table's amplitude). A noise-free recording (signal simulators add no
-//! noise) can read less: the noise is then taken at that floor, which keeps C/N0 finite, and
-//! the estimate is flagged ([`WindowEstimate::quantization_limited`]).
+//! noise) reads about that, or less: below the floor the noise is taken at the floor, which
+//! keeps C/N0 finite, and an estimate whose noise is within [`QUANTIZATION_MARGIN`] of the
+//! floor is flagged ([`WindowEstimate::quantization_limited`]): its C/N0 is the signal over the
+//! samples' rounding, not over thermal noise.
 
 use crate::signal::correlator::Taps;
 use crate::signal::nco::CARRIER_AMPLITUDE;
@@ -36,6 +38,10 @@ pub const MAX_CN0_DBHZ: f32 = 99.0;
 
 /// Uniform rounding noise per component and sample, LSB².
 const ROUNDING_NOISE_LSB2: f32 = 1.0 / 12.0;
+
+/// A noise estimate below this many times the quantization floor is the rounding's, not
+/// thermal noise (3 dB).
+pub const QUANTIZATION_MARGIN: f32 = 2.0;
 
 /// Window statistics of the reference antenna's taps.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -62,7 +68,9 @@ pub struct WindowEstimate {
     pub shape: f32,
     /// Prompt signal power `mean|P|² − mean|N|²` per epoch, 2⁻²⁰ units (0 at most).
     pub signal_power: f32,
-    /// The noise tap read less than the quantization floor: the floor was used.
+    /// The noise tap read less than [`QUANTIZATION_MARGIN`] times the quantization floor
+    /// (the floor was used when below it): the C/N0 is the signal over the samples'
+    /// rounding.
     pub quantization_limited: bool,
     /// Epochs in the window.
     pub epochs: u32,
@@ -99,7 +107,7 @@ impl PowerWindow {
         let (measured_noise, floor) = (self.sum_n2 / n, self.sum_floor / n);
         let epochs = self.count;
         *self = Self::default();
-        let quantization_limited = measured_noise < floor;
+        let quantization_limited = measured_noise < QUANTIZATION_MARGIN * floor;
         let pn = measured_noise.max(floor);
         let signal = pi + pq - pn;
         let ratio = if pn > 0.0 { signal / (pn * t) } else { 0.0 };

@@ -410,6 +410,17 @@ fn phantom_lock(opts: &StatsOptions) -> Result<PhantomLock> {
     })
 }
 
+/// Measures the thermal-noise background alone (detection probability, false alarms).
+///
+/// # Errors
+/// Synthesis, I/O or acquisition errors.
+pub fn measure_thermal(opts: &StatsOptions) -> Result<CaseFigures> {
+    std::fs::create_dir_all(&opts.work_dir)?;
+    let case = cases(opts).into_iter().next();
+    let case = case.ok_or_else(|| anyhow::anyhow!("no thermal case"))?;
+    measure_case(&case, &opts.work_dir)
+}
+
 /// Measures every background and the phantom lock.
 ///
 /// # Errors

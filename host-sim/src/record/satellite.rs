@@ -63,8 +63,9 @@ pub struct SatelliteReport {
     pub cn0_basis_s: f64,
     /// `cn0_dbhz_mean` rests on less than one second (no 1 s report).
     pub cn0_short_window: bool,
-    /// The noise estimate fell below what the samples' quantization allows (a noise-free
-    /// recording): the C/N0 is then the signal over the quantization floor.
+    /// The noise estimate was no more than the samples' quantization explains (a noise-free
+    /// recording), at some point while locked: the C/N0 is then the signal over the rounding
+    /// noise (or its floor), not over thermal noise.
     pub cn0_quantization_limited: bool,
     /// Times the channel released itself as another satellite's cross-correlation.
     pub cross_correlation_releases: u32,
@@ -318,7 +319,7 @@ impl SatTrack {
             doppler_hz_per_s: per_s(&self.rows),
             cn0_dbhz_per_s: self.cn0_reports.iter().map(|r| r.1).collect(),
             cn0_basis_s: if short {
-                f64::from(self.cn0_estimate.window_s)
+                (f64::from(self.cn0_estimate.window_s) * 1e3).round() / 1e3
             } else {
                 reports.len() as f64
             },

@@ -300,7 +300,8 @@ impl<const N: usize> Acquisition<N> {
 
     /// Prepares the interference handling for these samples: the tones to cancel
     /// ([`super::tone`]) and the background line power of the spectrum after their
-    /// cancellation, for [`Acquisition::excise`] (0 for silent samples).
+    /// cancellation, for [`Acquisition::excise`] (0 for silent samples, and when no line
+    /// of millisecond 0 stands out: nothing to excise).
     pub(super) fn prepare_interference(
         &mut self,
         i: &[i8],
@@ -311,11 +312,16 @@ impl<const N: usize> Acquisition<N> {
         self.level = 0.0;
         self.tone_count = 0;
         let level = self.spectrum_level(i, q, config, dc);
-        self.level = if self.find_tones(i, q, level, config, dc) > 0 {
+        let level = if self.find_tones(i, q, level, config, dc) > 0 {
             self.spectrum_level(i, q, config, dc)
         } else {
             level
         };
+        // Excision only where the spectrum (after the tones' cancellation) has a line to
+        // remove: none costs nothing per millisecond.
+        let limit = EXCISION_FACTOR * level;
+        let lines = self.data.iter().any(|d| d[0] * d[0] + d[1] * d[1] > limit);
+        self.level = if lines { level } else { 0.0 };
     }
 
     /// The background line power of the IF-mixed spectrum of millisecond 0 (left in
@@ -359,18 +365,20 @@ impl<const N: usize> Acquisition<N> {
             return;
         }
         let power = |d: &Complex| d[0] * d[0] + d[1] * d[1];
+        let limit = EXCISION_FACTOR * level;
         let mut lines = [(0.0f32, 0usize); MAX_EXCISED_LINES];
+        // Rolling powers of lines k − 1, k, k + 1 (each computed once).
+        let (mut before, mut p) = (power(&self.data[N - 1]), power(&self.data[0]));
         for k in 0..N {
-            let p = power(&self.data[k]);
-            let before = power(&self.data[(k + N - 1) & (N - 1)]);
             let after = power(&self.data[(k + 1) & (N - 1)]);
-            if p > EXCISION_FACTOR * level && p >= before && p > after {
+            if p > limit && p >= before && p > after {
                 // Keep the strongest: replace the weakest kept line.
                 let weakest = lines.iter_mut().min_by(|a, b| a.0.total_cmp(&b.0));
                 if let Some(w) = weakest.filter(|w| p > w.0) {
                     *w = (p, k);
                 }
             }
+            (before, p) = (p, after);
         }
         for &(p, k) in lines.iter().filter(|l| l.0 > 0.0) {
             let half = libm::ceilf(libm::sqrtf(p / level) / core::f32::consts::PI) as usize;
