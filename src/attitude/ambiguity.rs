@@ -179,7 +179,8 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
 
     /// Resolves the ambiguities of one epoch and solves the attitude: the float solution, the
     /// LAMBDA decorrelation, the integer search, the validation, the fix (the steps of the
-    /// module documentation).
+    /// module documentation). (The steps are inlined into this function: as calls they cost
+    /// the target's budget a few thousand instructions more.)
     ///
     /// # Errors
     /// [`AmbiguityError::Input`] for too few satellites or coplanar lines of sight;
@@ -233,6 +234,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     }
 
     /// Phase and code weights `(κ_φ, κ_p, κ)` (1/m²).
+    #[inline]
     fn weights(&self) -> (T, T, T) {
         let cfg = &self.config;
         let k_phi = T::one() / (cfg.phase_sigma_m * cfg.phase_sigma_m);
@@ -243,6 +245,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     /// Step 1, the float solution: `â_i = N⁻¹ S W p_i`, `ẑ_ij = φ_ij − s_j·â_i / λ` (shifted by
     /// `round(ẑ)`), the conditional baselines at the shift, and `Q₁`.
     #[allow(clippy::needless_range_loop)] // index loops mirror the equations
+    #[inline(always)]
     fn float_solution<const N: usize>(
         &self,
         sats: &[PhaseSatellite<M, T>],
@@ -294,6 +297,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
 
     /// Step 3, the integer search with the constraint terms (the baseline-length bound at the
     /// end of each baseline, the rotation fit of a full candidate), or without them.
+    #[inline(always)]
     fn search<const N: usize>(
         &self,
         search: &IntegerSearch<'_, M, N, T>,
@@ -343,6 +347,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     /// Step 4, the validation: the χ² test of the best, the ratio test against the second.
     /// Without a second candidate inside the search bound the ratio is `bound / best`, a lower
     /// bound of the true one.
+    #[inline(always)]
     fn validate<const N: usize>(
         &self,
         outcome: &SearchOutcome<M, N, T>,
@@ -410,6 +415,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     /// Step 5, the fix: `z = shift + Z⁻ᵀ z'`, the range differences of the fixed phases, the
     /// attitude.
     #[allow(clippy::needless_range_loop)] // index loops mirror the equations
+    #[inline(always)]
     fn fix<const N: usize>(
         &self,
         sats: &[PhaseSatellite<M, T>],
@@ -472,6 +478,7 @@ struct ConditionalBaselines<const M: usize, const N: usize, T> {
 }
 
 impl<const M: usize, const N: usize, T: Real> ConditionalBaselines<M, N, T> {
+    #[inline(always)]
     fn new(
         float: &FloatSolution<M, N, T>,
         dec: &Decorrelation<N, T>,
@@ -505,6 +512,7 @@ impl<const M: usize, const N: usize, T: Real> ConditionalBaselines<M, N, T> {
     }
 
     /// `ǎ_i(z')` for baseline `i`'s decorrelated integers.
+    #[inline]
     fn at(&self, i: usize, z: &[T; N]) -> Vector3<T> {
         let mut a = self.a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
         for (t, &zc) in self.t_a.iter().zip(z.iter()).take(self.n) {

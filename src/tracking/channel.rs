@@ -70,9 +70,11 @@ pub enum ChannelState {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LockFlags {
-    /// Signal present, code tracked (C/N0 above threshold).
+    /// Signal present, code tracked: C/N0 above threshold on a correlation peak for
+    /// [`ChannelConfig::lock_windows_to_declare`] lock windows (and not released as a
+    /// cross-correlation).
     pub code: bool,
-    /// Carrier phase tracked (modulo the data-bit half cycle).
+    /// Carrier phase tracked (modulo the data-bit half cycle), with the code lock.
     pub phase: bool,
     /// Data-bit edges known.
     pub bit_sync: bool,

@@ -91,18 +91,22 @@ pub(super) struct Floor {
 }
 
 impl Floor {
-    /// Adds one Doppler bin's cells except those within `guard` bins of `peak_at`.
+    /// Adds one Doppler bin's cells except those within `guard` bins of `peak_at` (f32 sums
+    /// within the bin, f64 across bins: the target has no double-precision unit).
     fn add_bin(&mut self, power: &[f32], peak_at: usize, guard: usize) {
         let n = power.len();
+        let (mut sum, mut sum_sq, mut count) = (0.0f32, 0.0f32, 0u32);
         for (l, &p) in power.iter().enumerate() {
             let d = l.abs_diff(peak_at);
             if d.min(n - d) > guard {
-                let p = f64::from(p);
-                self.sum += p;
-                self.sum_sq += p * p;
-                self.count += 1;
+                sum += p;
+                sum_sq += p * p;
+                count += 1;
             }
         }
+        self.sum += f64::from(sum);
+        self.sum_sq += f64::from(sum_sq);
+        self.count += u64::from(count);
     }
 
     /// Mean background cell (0 without cells).
@@ -338,19 +342,15 @@ impl<const N: usize> Acquisition<N> {
         self.fft.transform(&mut self.data, false);
         let mut level = f32::INFINITY;
         for _ in 0..LEVEL_STEPS {
-            let (mut sum, mut count) = (0.0f64, 0u32);
+            let (mut sum, mut count) = (0.0f32, 0u32);
             for d in &self.data {
                 let p = d[0] * d[0] + d[1] * d[1];
                 if p <= EXCISION_FACTOR * level {
-                    sum += f64::from(p);
+                    sum += p;
                     count += 1;
                 }
             }
-            level = if count > 0 {
-                (sum / f64::from(count)) as f32
-            } else {
-                0.0
-            };
+            level = if count > 0 { sum / count as f32 } else { 0.0 };
         }
         level
     }

@@ -101,12 +101,10 @@ impl<const N: usize> Acquisition<N> {
         }
         let mut lines = [(0.0f32, 0.0f32); MAX_TONES]; // (power, frequency Hz)
         let power = |d: &Complex| d[0] * d[0] + d[1] * d[1];
+        // Rolling powers of lines k − 1, k, k + 1 (each computed once).
+        let (mut before, mut p) = (power(&self.data[N - 1]), power(&self.data[0]));
         for k in 0..N {
-            let (p, before, after) = (
-                power(&self.data[k]),
-                power(&self.data[(k + N - 1) & (N - 1)]),
-                power(&self.data[(k + 1) & (N - 1)]),
-            );
+            let after = power(&self.data[(k + 1) & (N - 1)]);
             if p > TONE_FACTOR * level && p >= before && p > after {
                 // Parabola through the amplitudes; bin k is k kHz (wrapped to ±N/2).
                 let (a0, am, ap) = (libm::sqrtf(p), libm::sqrtf(before), libm::sqrtf(after));
@@ -126,6 +124,7 @@ impl<const N: usize> Acquisition<N> {
                     *w = (p, 1000.0 * (bin + delta));
                 }
             }
+            (before, p) = (p, after);
         }
         let ms = 2 * usize::from(config.noncoherent_ms);
         let mut count = 0usize;
