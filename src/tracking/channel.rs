@@ -140,6 +140,10 @@ struct CrossCorrelationWatch {
 /// Doppler uncertainty of a tracking channel for the cross-correlation test, Hz.
 const TRACKING_DOPPLER_TOLERANCE_HZ: f32 = 25.0;
 
+/// Code-phase uncertainty of a tracking channel for the cross-correlation test (the DLL sits
+/// within a fraction of a chip of the correlation's peak), chips.
+const TRACKING_LAG_TOLERANCE_CHIPS: f64 = 0.25;
+
 /// One satellite's channel.
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -520,6 +524,7 @@ impl<const A: usize> Channel<A> {
         let test = CrossCorrelationTest {
             epoch_aligned: true,
             doppler_tolerance_hz: TRACKING_DOPPLER_TOLERANCE_HZ,
+            lag_tolerance_chips: TRACKING_LAG_TOLERANCE_CHIPS,
             coherence_hz: 1.0 / epoch_s,
             margin: self.config.cross_correlation_margin,
         };

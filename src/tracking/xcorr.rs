@@ -30,15 +30,16 @@
 
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH};
 
-/// Lag steps of the grid around the nominal lag, chips.
-pub const GRID_LAG_CHIPS: [f32; 3] = [-0.25, 0.0, 0.25];
+/// Lag steps of the grid around the nominal lag, as fractions of the lag tolerance the caller
+/// gives.
+const GRID_LAG_FRACTIONS: [f64; 5] = [-1.0, -0.5, 0.0, 0.5, 1.0];
 
 /// Doppler steps of the grid around the nominal Doppler offset, as fractions of the Doppler
 /// tolerance the caller gives.
 const GRID_DOPPLER_FRACTIONS: [f32; 3] = [-1.0, 0.0, 1.0];
 
 /// Grid points of one cross-correlation maximum.
-pub const GRID_POINTS: usize = GRID_LAG_CHIPS.len() * GRID_DOPPLER_FRACTIONS.len();
+pub const GRID_POINTS: usize = GRID_LAG_FRACTIONS.len() * GRID_DOPPLER_FRACTIONS.len();
 
 /// Most other signals one test considers (satellites in view of one antenna).
 pub const MAX_OTHERS: usize = 32;
@@ -130,6 +131,8 @@ pub struct CrossCorrelationTest {
     pub epoch_aligned: bool,
     /// Doppler uncertainty of the offsets, Hz (the grid's Doppler half-width).
     pub doppler_tolerance_hz: f32,
+    /// Code-phase uncertainty of the lags, chips (the grid's lag half-width).
+    pub lag_tolerance_chips: f64,
     /// Doppler difference (modulo 1 kHz) within which two others add coherently, Hz
     /// (about one over the integration time).
     pub coherence_hz: f32,
@@ -160,12 +163,12 @@ fn largest_fraction(victim: &SignalProbe, other: &SignalProbe, test: &CrossCorre
     };
     let offset = other.doppler_hz - victim.doppler_hz;
     let mut best = 0.0f32;
-    for &dl in &GRID_LAG_CHIPS {
+    for &dl in &GRID_LAG_FRACTIONS {
         for &df in &GRID_DOPPLER_FRACTIONS {
             let r = code_cross_correlation(
                 other.prn,
                 victim.prn,
-                tau_b - tau_a + f64::from(dl),
+                tau_b - tau_a + dl * test.lag_tolerance_chips,
                 start,
                 offset + df * test.doppler_tolerance_hz,
             );
@@ -291,6 +294,7 @@ mod tests {
     const TEST: CrossCorrelationTest = CrossCorrelationTest {
         epoch_aligned: false,
         doppler_tolerance_hz: 100.0,
+        lag_tolerance_chips: 0.25,
         coherence_hz: 50.0,
         margin: 2.0,
     };

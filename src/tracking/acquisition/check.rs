@@ -59,7 +59,7 @@ impl<const N: usize> Acquisition<N> {
     /// are skipped; at most [`MAX_OTHERS`] are used.
     ///
     /// Bounded: `(1 + known) · K` iterations of one millisecond of samples and two `N`-point
-    /// FFTs, and `9 · known` code cross-correlations.
+    /// FFTs, and [`crate::tracking::xcorr::GRID_POINTS`] `· known` code cross-correlations.
     ///
     /// # Errors
     /// As [`Acquisition::search`], and [`AcquisitionError::NonFinite`] for a non-finite
@@ -85,25 +85,30 @@ impl<const N: usize> Acquisition<N> {
         }
         let dc = input_mean(i, q, config.samples_needed());
         self.prepare_interference(i, q, config, dc);
-        let mut probe = |s: &KnownSignal| SignalProbe {
+        let mut probe = |s: &KnownSignal, interpolate: bool| SignalProbe {
             prn: s.prn,
             sample: 0,
             code_phase_chips: s.code_phase_chips,
             code_chips_per_sample: 0.0,
             doppler_hz: s.doppler_hz,
-            power: self.signal_power(s, i, q, config, dc),
+            power: self.signal_power(s, interpolate, i, q, config, dc),
         };
-        let victim = probe(&KnownSignal::from(candidate));
+        // The candidate's strongest cell as it is (a cross-correlation peak is no triangle:
+        // interpolating it as one would inflate it); the known signals' triangles
+        // interpolated (their full power makes the cross-correlation they put there).
+        let victim = probe(&KnownSignal::from(candidate), false);
         let mut others = [victim; MAX_OTHERS];
         let mut count = 0usize;
         let distinct = known.iter().filter(|k| k.prn != candidate.prn);
         for (slot, k) in others.iter_mut().zip(distinct) {
-            *slot = probe(k);
+            *slot = probe(k, true);
             count += 1;
         }
         let test = CrossCorrelationTest {
             epoch_aligned: false,
             doppler_tolerance_hz: 0.25 * config.doppler_step_hz,
+            // One code bin: the candidate's peak is located to within it.
+            lag_tolerance_chips: CA_CODE_LENGTH as f64 / N as f64,
             coherence_hz: 1000.0 / f32::from(config.noncoherent_ms),
             margin,
         };
@@ -117,11 +122,13 @@ impl<const N: usize> Acquisition<N> {
     }
 
     /// A signal's power on the first `K` ms: the engine's correlation at its Doppler, the
-    /// strongest cell within one code bin of its code phase with the triangle's peak
-    /// interpolated, less the mean background cell of that Doppler bin. Engine units.
+    /// strongest cell within one code bin of its code phase (`interpolate`: with the
+    /// correlation triangle's peak interpolated), less the mean background cell of that
+    /// Doppler bin. Engine units.
     fn signal_power(
         &mut self,
         s: &KnownSignal,
+        interpolate: bool,
         i: &[i8],
         q: Option<&[i8]>,
         config: &AcquisitionConfig,
@@ -131,7 +138,7 @@ impl<const N: usize> Acquisition<N> {
         let len = CA_CODE_LENGTH as f64;
         let phase = s.code_phase_chips - libm::floor(s.code_phase_chips / len) * len;
         let centre = libm::round(N as f64 * (1.0 - phase / len)) as usize & (N - 1);
-        let (peak, floor) = self.measure_at(i, q, s.doppler_hz, centre, config, dc);
+        let (peak, floor) = self.measure_at(i, q, s.doppler_hz, centre, interpolate, config, dc);
         (peak - floor).max(0.0)
     }
 }

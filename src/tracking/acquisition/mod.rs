@@ -417,3 +417,165 @@ fn ln_gamma_survival(k: f64, x: f64) -> f64 {
     }
     -x + max_term + libm::log(sum)
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::noise::{SplitMix64, StandardNormal};
+    use crate::signal::ca_code::CA_CODE_LENGTH;
+    use std::vec::Vec;
+
+    const FS: f64 = 2.046e6;
+
+    fn config() -> AcquisitionConfig {
+        AcquisitionConfig {
+            sample_rate_hz: FS,
+            intermediate_frequency_hz: 0.0,
+            doppler_max_hz: 1000.0,
+            doppler_step_hz: 500.0,
+            noncoherent_ms: 4,
+            false_alarm_probability: 1e-3,
+        }
+    }
+
+    fn prn(n: u8) -> Prn {
+        Prn::new(n).unwrap()
+    }
+
+    /// A satellite: PRN, amplitude (LSB per component), Doppler (Hz), code phase (chips).
+    type Sat = (u8, f64, f64, f64);
+
+    /// Complex samples: the satellites (no data bits) plus noise of `sigma` LSB, rounded.
+    fn samples(sats: &[Sat], sigma: f32, dc: (f64, f64), seed: u64) -> (Vec<i8>, Vec<i8>) {
+        let n = config().samples_needed();
+        let mut rng = SplitMix64::new(seed);
+        let mut normal = StandardNormal::new();
+        let (mut i, mut q) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for k in 0..n {
+            let t = k as f64 / FS;
+            let (mut x, mut y) = (dc.0, dc.1);
+            for &(p, a, f, tau) in sats {
+                let chip = (tau + t * CA_CHIP_RATE_HZ * (1.0 + f / 1575.42e6)) % 1023.0;
+                let c = f64::from(prn(p).chip(chip as usize % CA_CODE_LENGTH));
+                let ph = core::f64::consts::TAU * f * t;
+                x += a * c * libm::cos(ph);
+                y += a * c * libm::sin(ph);
+            }
+            x += f64::from(sigma * normal.sample(&mut rng));
+            y += f64::from(sigma * normal.sample(&mut rng));
+            i.push(libm::round(x).clamp(-128.0, 127.0) as i8);
+            q.push(libm::round(y).clamp(-128.0, 127.0) as i8);
+        }
+        (i, q)
+    }
+
+    fn engine() -> std::boxed::Box<Acquisition<1024>> {
+        std::boxed::Box::new(Acquisition::new().unwrap())
+    }
+
+    /// A satellite in thermal noise is a candidate, passes the dwell, and comes out at its
+    /// Doppler and code phase; the background behaves as the `K` independent milliseconds it
+    /// is, so the threshold is the classic one.
+    #[test]
+    fn a_satellite_in_noise_is_detected_verified_and_located() {
+        let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (0.0, 0.0), 1);
+        let r = engine()
+            .search_report(prn(7), &i, Some(&q), 0, &config())
+            .unwrap();
+        assert!(r.candidate && r.result.detected, "{r:?}");
+        assert_eq!(r.verification, Verification::Passed);
+        assert_eq!(r.effective_ms, 4, "{r:?}");
+        let classic = detection_threshold(4, 5120.0, 1e-3);
+        assert_eq!(r.result.threshold, classic);
+        assert!((r.result.doppler_hz - 420.0).abs() < 150.0, "{r:?}");
+        assert!((r.result.code_phase_chips - 300.2).abs() < 0.5, "{r:?}");
+    }
+
+    /// With only the search's samples a candidate is reported but not detected (no dwell).
+    #[test]
+    fn without_the_dwell_samples_nothing_is_detected() {
+        let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (0.0, 0.0), 2);
+        let n = config().search_samples();
+        let r = engine()
+            .search_report(prn(7), &i[..n], Some(&q[..n]), 0, &config())
+            .unwrap();
+        assert!(r.candidate && !r.result.detected);
+        assert_eq!(r.verification, Verification::NoSamples);
+        assert_eq!(
+            engine().search(prn(7), &i[..n - 1], Some(&q[..n - 1]), 0, &config()),
+            Err(AcquisitionError::NotEnoughSamples)
+        );
+    }
+
+    /// Constant, saturated and silent inputs detect nothing for any PRN; a DC offset on a
+    /// noisy satellite does not hide it.
+    #[test]
+    fn degenerate_inputs_detect_nothing() {
+        let n = config().samples_needed();
+        let mut e = engine();
+        for value in [0i8, 127, -128, 20] {
+            let (i, q) = (std::vec![value; n], std::vec![value / 2; n]);
+            for p in 1..=32 {
+                let r = e.search(prn(p), &i, Some(&q), 0, &config()).unwrap();
+                assert!(!r.detected, "constant {value}: PRN {p} {r:?}");
+            }
+        }
+        let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (20.0, -13.0), 3);
+        let r = e.search(prn(7), &i, Some(&q), 0, &config()).unwrap();
+        assert!(r.detected && (r.doppler_hz - 420.0).abs() < 150.0, "{r:?}");
+    }
+
+    /// A noise-free strong satellite: another PRN's search sees its cross-correlation, which
+    /// repeats every millisecond; the background's effective milliseconds drop and no absent
+    /// PRN is detected. Handed the absent PRN's strongest peak, the cross-correlation test
+    /// names the strong satellite; a real weaker satellite is not explained.
+    #[test]
+    fn cross_correlation_is_neither_detected_nor_accepted() {
+        let strong: Sat = (5, 40.0, 1000.0, 100.0);
+        let (i, q) = samples(&[strong], 0.0, (0.0, 0.0), 4);
+        let mut e = engine();
+        let known = [KnownSignal {
+            prn: prn(5),
+            doppler_hz: 1000.0,
+            code_phase_chips: 100.0,
+        }];
+        let mut explained = 0;
+        for p in (1..=32).filter(|&p| p != 5) {
+            let r = e.search_report(prn(p), &i, Some(&q), 0, &config()).unwrap();
+            assert!(!r.result.detected, "PRN {p}: {r:?}");
+            assert!(r.effective_ms < 4, "PRN {p}: {r:?}");
+            let check = e
+                .cross_check(
+                    &r.result,
+                    &known,
+                    &i,
+                    Some(&q),
+                    &config(),
+                    CROSS_CORRELATION_MARGIN,
+                )
+                .unwrap();
+            if check.explained {
+                assert_eq!(check.source, Some(prn(5)));
+                explained += 1;
+            }
+        }
+        // Every absent PRN's strongest peak is the strong satellite's cross-correlation.
+        assert_eq!(explained, 31);
+        let weak: Sat = (9, 6.0, -500.0, 700.4);
+        let (i, q) = samples(&[strong, weak], 0.0, (0.0, 0.0), 5);
+        let r = e.search(prn(9), &i, Some(&q), 0, &config()).unwrap();
+        assert!(r.detected, "{r:?}");
+        let check = e
+            .cross_check(
+                &r,
+                &known,
+                &i,
+                Some(&q),
+                &config(),
+                CROSS_CORRELATION_MARGIN,
+            )
+            .unwrap();
+        assert!(!check.explained, "{check:?}");
+    }
+}

@@ -26,6 +26,10 @@ const MAX_EXCISED_LINES: usize = 32;
 /// Steps of the trimmed mean that estimates the background line power.
 const LEVEL_STEPS: usize = 4;
 
+/// Standard errors below `K` within which the background's effective number of milliseconds
+/// counts as `K` (thermal noise keeps the classic threshold).
+const K_TOLERANCE_SE: f64 = 2.0;
+
 /// Doppler bins of the verification dwell (the refined Doppler and ± half a step).
 const DWELL_BINS: usize = 3;
 
@@ -119,6 +123,9 @@ impl Floor {
     }
 
     /// `⌊μ²/σ²⌋` clamped to `1..=k` (`k` for a background without spread, 1 without cells).
+    /// A ratio within [`K_TOLERANCE_SE`] standard errors below `k` counts as `k`: on thermal
+    /// noise the estimate scatters around `k` (standard error `k √((2 + 6/k)/n)` for `n`
+    /// cells, half of them independent), and the classic threshold is kept.
     pub(super) fn effective_ms(&self, k: u16) -> u16 {
         if self.count < 2 {
             return 1;
@@ -129,13 +136,13 @@ impl Floor {
         if !(mean > 0.0) {
             return 1;
         }
-        if !(var > 0.0) {
+        let k_f = f64::from(k.max(1));
+        let se = k_f * libm::sqrt((2.0 + 6.0 / k_f) / (0.5 * n));
+        if !(var > 0.0) || mean * mean / var >= k_f - K_TOLERANCE_SE * se {
             return k.max(1);
         }
         let ratio = libm::floor(mean * mean / var);
-        if ratio >= f64::from(k) {
-            k.max(1)
-        } else if ratio >= 1.0 {
+        if ratio >= 1.0 {
             ratio as u16
         } else {
             1
@@ -235,14 +242,16 @@ impl<const N: usize> Acquisition<N> {
     }
 
     /// One Doppler `doppler` over the first `K` ms: the strongest cell within one code bin of
-    /// lag `centre` with the correlation triangle's peak interpolated, and the mean
-    /// background cell (away from the bin's peak). Needs the code prepared.
+    /// lag `centre` (`interpolate`: with the correlation triangle's peak interpolated), and
+    /// the mean background cell (away from the bin's peak). Needs the code prepared.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn measure_at(
         &mut self,
         i: &[i8],
         q: Option<&[i8]>,
         doppler: f32,
         centre: usize,
+        interpolate: bool,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> (f32, f32) {
@@ -254,6 +263,9 @@ impl<const N: usize> Acquisition<N> {
         };
         let window = CodeWindow { centre, half: 1 };
         let (peak, floor) = self.scan(i, q, &grid, Some(window), config, dc);
+        if !interpolate {
+            return (peak.power, floor.mean());
+        }
         let (a0, am, ap) = (
             libm::sqrtf(peak.power),
             libm::sqrtf(peak.neighbours[0]),
