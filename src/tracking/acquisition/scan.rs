@@ -95,21 +95,37 @@ pub(super) struct Floor {
 }
 
 impl Floor {
-    /// Adds one Doppler bin's cells except those within `guard` bins of `peak_at` (f32 sums
-    /// within the bin, f64 across bins: the target has no double-precision unit).
+    /// Adds one Doppler bin's cells except those within `guard` bins of `peak_at`: f32 sums
+    /// within the bin (the target has no double-precision unit), the squares scaled by the
+    /// bin's mean so that they stay far inside f32's range, f64 across bins.
     fn add_bin(&mut self, power: &[f32], peak_at: usize, guard: usize) {
         let n = power.len();
-        let (mut sum, mut sum_sq, mut count) = (0.0f32, 0.0f32, 0u32);
-        for (l, &p) in power.iter().enumerate() {
+        let background = |l: usize| {
             let d = l.abs_diff(peak_at);
-            if d.min(n - d) > guard {
+            d.min(n - d) > guard
+        };
+        let (mut sum, mut count) = (0.0f32, 0u32);
+        for (l, &p) in power.iter().enumerate() {
+            if background(l) {
                 sum += p;
-                sum_sq += p * p;
                 count += 1;
             }
         }
+        if count == 0 || !(sum > 0.0) {
+            self.count += u64::from(count);
+            return;
+        }
+        let scale = count as f32 / sum;
+        let mut sum_sq = 0.0f32;
+        for (l, &p) in power.iter().enumerate() {
+            if background(l) {
+                let x = p * scale;
+                sum_sq += x * x;
+            }
+        }
+        let unscale = f64::from(sum) / f64::from(count);
         self.sum += f64::from(sum);
-        self.sum_sq += f64::from(sum_sq);
+        self.sum_sq += f64::from(sum_sq) * unscale * unscale;
         self.count += u64::from(count);
     }
 
@@ -533,6 +549,50 @@ impl<const N: usize> Acquisition<N> {
             },
             metric,
             threshold,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Floor;
+    use crate::noise::{SplitMix64, StandardNormal};
+
+    /// Background statistics against an f64 reference, at a power scale whose squares would
+    /// overflow f32 (1e20: cells of a strong, loud input): `Gamma(k)`-like cells give `k`, a
+    /// repeating background (exponential cells) gives 1.
+    #[test]
+    fn the_background_statistics_hold_at_any_scale() {
+        let mut rng = SplitMix64::new(9);
+        let mut normal = StandardNormal::new();
+        for (k, expected) in [(20usize, 20u16), (1, 1)] {
+            let mut floor = Floor::default();
+            let (mut s, mut s2, mut n) = (0.0f64, 0.0f64, 0.0f64);
+            for _ in 0..8 {
+                let mut power = [0.0f32; 1024];
+                for p in power.iter_mut() {
+                    // sum of k exponentials (|complex normal|²), mean 1, times 1e20
+                    let mut v = 0.0f32;
+                    for _ in 0..k {
+                        let (a, b) = (normal.sample(&mut rng), normal.sample(&mut rng));
+                        v += 0.5 * (a * a + b * b) / k as f32;
+                    }
+                    *p = v * 1e20;
+                }
+                floor.add_bin(&power, 0, 3);
+                for &p in power.iter().skip(4).take(1024 - 7) {
+                    let p = f64::from(p);
+                    (s, s2, n) = (s + p, s2 + p * p, n + 1.0);
+                }
+            }
+            let mean = s / n;
+            assert!((f64::from(floor.mean()) / mean - 1.0).abs() < 1e-5);
+            assert_eq!(floor.effective_ms(20), expected, "k {k}");
+            let reference = mean * mean / (s2 / n - mean * mean);
+            assert!(
+                (reference - k as f64).abs() < 0.1 * k as f64 + 0.2,
+                "{reference}"
+            );
         }
     }
 }
