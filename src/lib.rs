@@ -88,12 +88,6 @@ pub mod tracking;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 
-pub use error::{
-    AcquisitionError, AmbiguityError, ArrayError, CalibrationError, DcmError, ErrorKind,
-    FilterError, FrontEndError, GeometryError, OneStageError, ReceiverError, SampleError,
-    SignalError, SnapshotError, TrackingError,
-};
-
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.
 ///

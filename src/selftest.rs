@@ -8,9 +8,9 @@
 
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
 
+use crate::ekf::FilterError;
 use crate::ekf::{Ekf, GateConfidence, NisGate, UpdateReport};
 use crate::noise::{SplitMix64, StandardNormal};
-use crate::FilterError;
 
 /// Seed of the self-test's random stream.
 pub const SELF_TEST_SEED: u64 = 0x5EED_A771_7D0E_0001;

@@ -3,6 +3,7 @@
 //! formula (16) and its reflection, the paper's Monte Carlo via host-sim, and integer
 //! ambiguity resolution on a real GPS sky (success, wrong fixes, refusals).
 
+use gnss_attitude::attitude::ambiguity::AmbiguityError;
 use gnss_attitude::attitude::ambiguity::{
     AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite, SearchMode,
     GPS_L1_WAVELENGTH_M,
@@ -11,9 +12,9 @@ use gnss_attitude::attitude::paper002::paper_formula;
 use gnss_attitude::attitude::range_model::{
     BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges,
 };
+use gnss_attitude::attitude::snapshot::SnapshotError;
 use gnss_attitude::attitude::snapshot::{SnapshotQuality, SnapshotSolver};
 use gnss_attitude::geometry::{rot_x, rot_y, rot_z, rotation_angle, Euler321};
-use gnss_attitude::{AmbiguityError, SnapshotError};
 use host_sim::truth::gps::{Almanac, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use rand::seq::SliceRandom;

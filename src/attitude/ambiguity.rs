@@ -46,14 +46,16 @@
 
 use nalgebra::{SMatrix, Vector3};
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::ekf::{chi_square_quantile, GateConfidence};
-use crate::{real, AmbiguityError, Real, SnapshotError};
+use crate::{real, Real};
 
 use super::integer_search::{IntegerSearch, SearchFailure};
 use super::lambda::decorrelate;
 use super::range_model::{los_normal_matrix, RangeDifferences, SatelliteRanges};
 pub use super::range_model::{PhaseObservations, PhaseSatellite};
 use super::snapshot::{SnapshotSolution, SnapshotSolver};
+use crate::error::{Error, ErrorKind};
 
 /// GPS L1 carrier wavelength, metres (c / 1575.42 MHz).
 pub const GPS_L1_WAVELENGTH_M: f64 = 0.190_293_672_798_365;
@@ -392,4 +394,41 @@ fn to_i32<T: Real>(x: T) -> i32 {
         .filter(|v| v.is_finite())
         .map(|v| v as i32)
         .unwrap_or(0)
+}
+
+/// Errors (refusals) of the integer ambiguity resolution ([`crate::attitude::ambiguity`]).
+///
+/// Every variant except [`AmbiguityError::Input`] is a *refusal*: the data were valid, but no
+/// integer solution could be validated, and the resolver returns no attitude rather than a
+/// possibly wrong one. Retry with the next epoch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AmbiguityError {
+    /// The observations or the configuration were invalid (see the inner error).
+    #[error("ambiguity input refused")]
+    Input(#[from] SnapshotError),
+    /// The integer search visited its node budget before it could prove its answer.
+    #[error("integer search budget exhausted")]
+    SearchBudgetExhausted,
+    /// No integer candidate lies inside the search bound: the data are inconsistent with the
+    /// model (a cycle slip, a wrong baseline, a multipath outlier).
+    #[error("no integer candidate inside the search bound")]
+    NoCandidate,
+    /// The ratio test failed: the second-best candidate fits almost as well as the best.
+    #[error("ratio test failed: ambiguities not validated")]
+    Ambiguous,
+    /// The best candidate fails the χ² test of the whole model (99.9 %).
+    #[error("best integer candidate fails the model test")]
+    ModelRejected,
+}
+
+impl Error for AmbiguityError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::Input(e) => e.kind(),
+            Self::SearchBudgetExhausted => ErrorKind::NotConverged,
+            Self::NoCandidate | Self::Ambiguous | Self::ModelRejected => ErrorKind::Unobservable,
+        }
+    }
 }

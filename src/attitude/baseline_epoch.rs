@@ -6,7 +6,7 @@
 
 use nalgebra::Vector3;
 
-use crate::error::DcmError;
+use crate::attitude::dcm_filter::DcmError;
 use crate::{real, Real};
 
 pub use super::array::{AntennaArray, BaselinePair, MIN_BASELINE_LENGTH};

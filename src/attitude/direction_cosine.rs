@@ -22,7 +22,7 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-use crate::error::DcmError;
+use crate::attitude::dcm_filter::DcmError;
 use crate::geometry::{skew, vee};
 use crate::{real, Real};
 

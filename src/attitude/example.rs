@@ -14,9 +14,9 @@
 
 use nalgebra::Vector3;
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::Euler321;
 use crate::noise::{SplitMix64, StandardNormal};
-use crate::SnapshotError;
 
 use super::ambiguity::{
     AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite, GPS_L1_WAVELENGTH_M,

@@ -2,7 +2,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::error::DcmError;
+use crate::attitude::dcm_filter::DcmError;
 use crate::geometry::{Euler321, Quaternion};
 use crate::Real;
 

@@ -14,7 +14,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::{real, Real, SnapshotError};
+use crate::attitude::snapshot::SnapshotError;
+use crate::{real, Real};
 
 /// Upper bound on the reduction loop's iterations (Gauss sweeps and swaps).
 pub const LAMBDA_MAX_ITERATIONS: usize = 512;

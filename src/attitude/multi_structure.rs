@@ -30,8 +30,8 @@
 
 use nalgebra::{Cholesky, Matrix3, SMatrix, Vector3};
 
+use crate::attitude::dcm_filter::DcmError;
 use crate::ekf::{chi_square_quantile, GateConfidence};
-use crate::error::DcmError;
 use crate::geometry::{log_so3, Quaternion};
 use crate::{real, Real};
 

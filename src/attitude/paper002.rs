@@ -12,8 +12,9 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::is_rotation;
-use crate::{real, Real, SnapshotError};
+use crate::{real, Real};
 
 use super::eigen::symmetric_eigen;
 use super::range_model::{Baselines, RangeDifferences};

@@ -16,7 +16,8 @@
 use heapless::Vec;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::{real, Real, SnapshotError};
+use crate::attitude::snapshot::SnapshotError;
+use crate::{real, Real};
 
 /// The largest number of satellites the crate's examples and budgets use (the paper's "up to
 /// 12"); the observation types take their capacity as a const generic `N`.
@@ -161,6 +162,7 @@ fn push_unique<S, const N: usize>(
     if sats.iter().any(|s| id(s) == id(&sat)) {
         return Err(SnapshotError::DuplicateSatellite);
     }
+    // (the refused satellite is dropped: the caller learns the set is full)
     sats.push(sat).map_err(|_| SnapshotError::TooManySatellites)
 }
 

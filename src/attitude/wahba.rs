@@ -20,8 +20,9 @@
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::Quaternion;
-use crate::{real, Real, SnapshotError};
+use crate::{real, Real};
 
 use super::eigen::symmetric_eigen;
 
@@ -132,8 +133,7 @@ impl<T: Real> WahbaProblem<T> {
         }
         let x = vectors.column(0);
         let q = Quaternion::new(x[3], x[0], x[1], x[2])
-            .normalize()
-            .map_err(|_| SnapshotError::Numerical)?
+            .normalize()?
             .canonical();
         let half: T = real(0.5);
         Ok(WahbaSolution {

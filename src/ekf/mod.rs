@@ -31,5 +31,5 @@
 mod filter;
 mod gate;
 
-pub use filter::{Ekf, ScalarUpdateReport, SequentialUpdateReport, UpdateReport};
+pub use filter::{Ekf, FilterError, ScalarUpdateReport, SequentialUpdateReport, UpdateReport};
 pub use gate::{chi_square_quantile, GateConfidence, NisGate};

@@ -3,7 +3,8 @@
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use crate::{real, CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::{real, Real};
 
 use super::lsq::{default_rank_tolerance, LsqSolution};
 use super::propagation::ResidualCentering;

@@ -71,7 +71,7 @@ mod error_model;
 pub mod lsq;
 mod propagation;
 
-pub use calibration::GyroCalibrator;
+pub use calibration::{CalibrationError, GyroCalibrator};
 pub use calibration_types::{
     CalibrationEstimate, CalibratorConfig, EpochCounters, EpochEquations, EpochOutcome, SkipReason,
 };
@@ -89,7 +89,7 @@ pub use propagation::{
 };
 
 use crate::geometry::Quaternion;
-use crate::{CalibrationError, Real};
+use crate::Real;
 
 /// The paper's §6 calibrator: `m = 3` (`D = [D_I D_II E₃]`, 9 gyro parameters), `n = 1`
 /// (`G = E₃`, constant drift), 15 unknowns, accumulator `A`.

@@ -10,7 +10,8 @@
 use nalgebra::Vector3;
 
 use crate::geometry::Quaternion;
-use crate::{real, CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::{real, Real};
 
 /// The two-sample coning-corrected rotation vector over `H = 2h` from the increments of its two
 /// halves (rad, body axes): `φ = θ₁ + θ₂ + ⅔ θ₁ × θ₂`.
@@ -56,6 +57,7 @@ impl<T: Real> AttitudePropagator<T> {
         if !m0.is_finite() {
             return Err(CalibrationError::NonFiniteInput);
         }
+        // (finite, checked above: a refusal can only be a zero norm, which this variant names)
         let q = m0
             .normalize()
             .map_err(|_| CalibrationError::InputOutOfRange)?;

@@ -4,8 +4,14 @@
 use nalgebra::Vector3;
 
 use crate::attitude::ambiguity::AmbiguityConfig;
+use crate::attitude::ambiguity::AmbiguityError;
+use crate::attitude::array::ArrayError;
+use crate::attitude::one_stage::OneStageError;
 use crate::attitude::one_stage::{FilterMode, OneStageConfig};
-use crate::ReceiverError;
+use crate::attitude::snapshot::SnapshotError;
+use crate::error::{Error, ErrorKind};
+use crate::gyro::CalibrationError;
+use crate::tracking::{AcquisitionError, TrackingError};
 
 /// The gyro the receiver propagates with and calibrates.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -145,54 +151,177 @@ impl ReceiverConfig {
         self.window_epochs as f32 * self.epoch_s
     }
 
-    /// Checks the values the receiver itself uses (the stages check their own).
-    pub(crate) fn validate(&self) -> Result<(), ReceiverError> {
-        let scalars = [
-            self.epoch_s,
-            self.prior_rate_sigma,
-            self.slip_threshold_cycles,
-            self.reanchor_angle_rad,
-            self.blocked_power_ratio,
-            self.baseline_sigma_m,
-            self.velocity_sigma_m_s,
-            self.max_coast_s,
-        ];
-        let finite = self
-            .antennas_m
-            .iter()
-            .flatten()
-            .chain(self.line_bias_rad.iter())
-            .chain(scalars.iter())
-            .all(|v| v.is_finite());
-        if !finite {
-            return Err(ReceiverError::NonFinite);
-        }
-        let positive = scalars.iter().all(|&v| v > 0.0);
-        let counts = self.window_epochs >= 10
-            && self.snapshot_windows >= 1
-            && self.min_cold_start_satellites >= 4
-            && self.min_fine_satellites >= 1
-            && self.slip_threshold_cycles < 0.5
-            && self.blocked_power_ratio < 0.5
-            && (self.fine.epoch_s - self.epoch_s).abs() <= 1e-6 * self.epoch_s;
-        if !(positive && counts) {
-            return Err(ReceiverError::InvalidConfig);
-        }
-        if let Some(g) = &self.gyro {
-            let h = g.sample_interval_s;
-            let ok = h.is_finite()
-                && h > 0.0
-                && g.angle_random_walk >= 0.0
-                && g.residual_rate_sigma >= 0.0
-                && g.calibration_window_s > 0.0
-                && g.calibration_max_sigma > 0.0;
-            // the window must end on a propagation step (2h)
-            let steps = self.window_s() / (2.0 * h);
-            if !(ok && (steps - libm::roundf(steps)).abs() < 1e-3 && steps >= 1.0) {
-                return Err(ReceiverError::InvalidConfig);
+    /// Checks every value the receiver itself uses (the stages check their own when the
+    /// receiver builds them): finite, and inside the range that keeps the arithmetic finite.
+    pub(crate) fn validate(&self) -> Result<(), ConfigError> {
+        for (i, p) in self.antennas_m.iter().enumerate() {
+            for &v in p {
+                in_range(
+                    ANTENNA_FIELDS.get(i).copied().unwrap_or("antennas_m"),
+                    v,
+                    -100.0,
+                    100.0,
+                )?;
             }
         }
+        for &b in &self.line_bias_rad {
+            in_range("line_bias_rad", b, -1e3, 1e3)?;
+        }
+        in_range("epoch_s", self.epoch_s, 1e-4, 0.1)?;
+        in_range("prior_rate_sigma", self.prior_rate_sigma, 1e-9, 10.0)?;
+        in_range(
+            "slip_threshold_cycles",
+            self.slip_threshold_cycles,
+            0.01,
+            0.49,
+        )?;
+        in_range("reanchor_angle_rad", self.reanchor_angle_rad, 1e-3, 1.0)?;
+        in_range("blocked_power_ratio", self.blocked_power_ratio, 1e-3, 0.49)?;
+        in_range("baseline_sigma_m", self.baseline_sigma_m, 1e-6, 1.0)?;
+        in_range("velocity_sigma_m_s", self.velocity_sigma_m_s, 1e-6, 10.0)?;
+        in_range("max_coast_s", self.max_coast_s, 1e-3, 86_400.0)?;
+        whole(
+            "window_epochs",
+            self.window_epochs >= 10 && self.window_epochs <= 10_000,
+        )?;
+        whole(
+            "snapshot_windows",
+            (1..=10_000).contains(&self.snapshot_windows),
+        )?;
+        whole(
+            "min_cold_start_satellites",
+            self.min_cold_start_satellites >= 4,
+        )?;
+        whole("min_fine_satellites", self.min_fine_satellites >= 1)?;
+        whole(
+            "fine.epoch_s",
+            (self.fine.epoch_s - self.epoch_s).abs() <= 1e-6 * self.epoch_s,
+        )?;
+        if let Some(g) = &self.gyro {
+            g.validate(self.window_s())?;
+        }
         Ok(())
+    }
+}
+
+impl GyroConfig {
+    /// Checks the gyro's values, and that a window of `window_s` seconds ends on a
+    /// propagation step `2h`.
+    pub(crate) fn validate(&self, window_s: f32) -> Result<(), ConfigError> {
+        in_range("gyro.sample_interval_s", self.sample_interval_s, 1e-6, 1.0)?;
+        if let Some(w) = self.pulse_weight_rad {
+            in_range("gyro.pulse_weight_rad", w, 1e-12, 0.1)?;
+        }
+        in_range("gyro.angle_random_walk", self.angle_random_walk, 0.0, 0.1)?;
+        in_range(
+            "gyro.residual_rate_sigma",
+            self.residual_rate_sigma,
+            0.0,
+            1.0,
+        )?;
+        in_range(
+            "gyro.calibration_window_s",
+            self.calibration_window_s,
+            1.0,
+            86_400.0,
+        )?;
+        in_range(
+            "gyro.calibration_max_sigma",
+            self.calibration_max_sigma,
+            1e-9,
+            1.0,
+        )?;
+        let steps = window_s / (2.0 * self.sample_interval_s);
+        whole(
+            "window_epochs",
+            (steps - libm::roundf(steps)).abs() < 1e-3 && steps >= 1.0,
+        )
+    }
+}
+
+const ANTENNA_FIELDS: [&str; 3] = ["antennas_m[0]", "antennas_m[1]", "antennas_m[2]"];
+
+/// `Ok` when `value` is finite and in `[min, max]`, else the error naming `field`.
+fn in_range(field: &'static str, value: f32, min: f32, max: f32) -> Result<(), ConfigError> {
+    if !value.is_finite() {
+        return Err(ConfigError::NonFinite { field });
+    }
+    if !(value >= min && value <= max) {
+        return Err(ConfigError::OutOfRange { field });
+    }
+    Ok(())
+}
+
+/// `Ok` when a condition on a count (or a relation between fields) holds.
+fn whole(field: &'static str, ok: bool) -> Result<(), ConfigError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ConfigError::OutOfRange { field })
+    }
+}
+
+/// Error returned by [`AttitudeReceiver::new`](super::AttitudeReceiver::new) and
+/// [`SampleReceiver::new`](super::SampleReceiver::new) for a configuration they refuse: the
+/// field at fault, or the stage that refused its part and why.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The field is NaN or infinite.
+    #[error("`{field}` is not finite")]
+    NonFinite {
+        /// The field's name in [`ReceiverConfig`] (`gyro.` for [`GyroConfig`] fields).
+        field: &'static str,
+    },
+    /// The field is outside its physical range (see the field's documentation), or a count
+    /// or relation between fields does not hold (a window that is not a whole number of gyro
+    /// steps, an epoch that differs from the fine filter's).
+    #[error("`{field}` is out of range")]
+    OutOfRange {
+        /// The field's name in [`ReceiverConfig`] (`gyro.` for [`GyroConfig`] fields).
+        field: &'static str,
+    },
+    /// The antenna array is degenerate.
+    #[error("antenna array refused")]
+    Array(#[from] ArrayError),
+    /// The snapshot solver refused the baselines.
+    #[error("snapshot solver refused the baselines")]
+    Baselines(#[from] SnapshotError),
+    /// The ambiguity resolver refused its configuration.
+    #[error("ambiguity resolver refused its configuration")]
+    Ambiguity(#[from] AmbiguityError),
+    /// The fine (one-stage) filter refused its configuration.
+    #[error("fine filter refused its configuration")]
+    Fine(#[from] OneStageError),
+    /// The gyro propagation refused its configuration.
+    #[error("gyro refused its configuration")]
+    Gyro(#[from] CalibrationError),
+    /// The acquisition engine refused its configuration.
+    #[error("acquisition engine refused its configuration")]
+    Acquisition(#[from] AcquisitionError),
+    /// The observation adapter or the epoch clock refused its configuration.
+    #[error("observation adapter refused its configuration")]
+    Adapter(#[source] OneStageError),
+    /// The tracking channels refused their configuration.
+    #[error("tracking channel refused its configuration")]
+    Tracking(#[from] TrackingError),
+}
+
+impl Error for ConfigError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite { .. } => ErrorKind::NonFinite,
+            Self::OutOfRange { .. } => ErrorKind::InvalidInput,
+            Self::Array(e) => e.kind(),
+            Self::Baselines(e) => e.kind(),
+            Self::Ambiguity(e) => e.kind(),
+            Self::Fine(e) => e.kind(),
+            Self::Gyro(e) => e.kind(),
+            Self::Acquisition(e) => e.kind(),
+            Self::Adapter(e) => e.kind(),
+            Self::Tracking(e) => e.kind(),
+        }
     }
 }
 

@@ -22,7 +22,7 @@ use crate::attitude::example::SKY;
 use crate::attitude::one_stage::{PromptIq, SatelliteObservation, GPS_L1_WAVELENGTH_M};
 use crate::geometry::Quaternion;
 use crate::noise::{SplitMix64, StandardNormal};
-use crate::ReceiverError;
+use crate::receiver::ReceiverError;
 
 use super::{AttitudeReceiver, GyroConfig, ReceiverConfig, SatelliteAiding, MAX_SATELLITES};
 

@@ -15,12 +15,12 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::attitude::one_stage::OneStageError;
 use crate::attitude::one_stage::{
     paper003_partials, AntennaArray, EpochReport, LockStatus, OneStageFilter, Prior,
     SatelliteObservation,
 };
 use crate::geometry::{vee, Paper003Angles, Quaternion};
-use crate::{OneStageError, ReceiverError};
 
 use super::config::ReceiverConfig;
 
@@ -49,15 +49,13 @@ impl FineStage {
         m: &Quaternion<f32>,
         rates: Vector3<f32>,
         epoch: u64,
-    ) -> Result<Self, ReceiverError> {
+    ) -> Result<Self, OneStageError> {
         let [a, b, c] = config.antenna_positions();
-        let array = AntennaArray::new([a, b, c]).map_err(|_| ReceiverError::InvalidConfig)?;
+        let array = AntennaArray::new([a, b, c])?;
         let prior = prior_at_identity(covariance, config.prior_rate_sigma, rates)?;
-        let filter = OneStageFilter::new(config.fine, array, &prior).map_err(map_error)?;
+        let filter = OneStageFilter::new(config.fine, array, &prior)?;
         // F = C_rK₀ M = C_rb at this epoch: C_rK₀ = C_rb Mᵀ
-        let anchor = (*c_rb * m.conjugate())
-            .normalize()
-            .map_err(|_| ReceiverError::NonFinite)?;
+        let anchor = (*c_rb * m.conjugate()).normalize()?;
         Ok(Self {
             filter,
             anchor,
@@ -77,7 +75,7 @@ impl FineStage {
         observations: &[SatelliteObservation<f32>],
         m: &Quaternion<f32>,
         epoch: u64,
-    ) -> Result<EpochReport<f32>, ReceiverError> {
+    ) -> Result<EpochReport<f32>, OneStageError> {
         let c_fr = self.frame(m).to_dcm().transpose();
         let mut rotated =
             heapless::Vec::<SatelliteObservation<f32>, { super::MAX_SATELLITES }>::new();
@@ -85,11 +83,12 @@ impl FineStage {
             let los = c_fr * Vector3::from(obs.los);
             let mut o = *obs;
             o.los = [los.x, los.y, los.z];
+            // (the receiver never holds more observations than slots)
             rotated
                 .push(o)
-                .map_err(|_| ReceiverError::TooManySatellites)?;
+                .map_err(|_| OneStageError::TooManySatellites)?;
         }
-        let report = self.filter.step(&rotated).map_err(map_error)?;
+        let report = self.filter.step(&rotated)?;
         if !rotated.is_empty() {
             self.last_update = epoch;
         }
@@ -135,7 +134,7 @@ impl FineStage {
         &mut self,
         config: &ReceiverConfig,
         m: &Quaternion<f32>,
-    ) -> Result<(), ReceiverError> {
+    ) -> Result<(), OneStageError> {
         let c_rb = self.attitude(m);
         let cov = self.covariance();
         let rates = self.filter.rates();
@@ -155,10 +154,8 @@ impl FineStage {
             }
         }
         let mut filter = self.filter.clone();
-        filter.reinitialize(&prior).map_err(map_error)?;
-        let anchor = (c_rb * m.conjugate())
-            .normalize()
-            .map_err(|_| ReceiverError::NonFinite)?;
+        filter.reinitialize(&prior)?;
+        let anchor = (c_rb * m.conjugate()).normalize()?;
         self.filter = filter;
         self.anchor = anchor;
         Ok(())
@@ -170,9 +167,8 @@ fn prior_at_identity(
     covariance: &Matrix3<f32>,
     rate_sigma: f32,
     rates: Vector3<f32>,
-) -> Result<Prior<f32>, ReceiverError> {
-    let mut prior =
-        Prior::from_attitude(&Matrix3::identity(), covariance, rate_sigma).map_err(map_error)?;
+) -> Result<Prior<f32>, OneStageError> {
+    let mut prior = Prior::from_attitude(&Matrix3::identity(), covariance, rate_sigma)?;
     prior.rates = rates;
     Ok(prior)
 }
@@ -189,15 +185,4 @@ pub(crate) fn body_covariance(angles: &Paper003Angles<f32>, p: &Matrix3<f32>) ->
     let m = u.transpose() * e;
     let c = m * p * m.transpose();
     (c + c.transpose()) * 0.5
-}
-
-fn map_error(e: OneStageError) -> ReceiverError {
-    match e {
-        OneStageError::NonFiniteInput => ReceiverError::NonFinite,
-        OneStageError::InvalidConfig | OneStageError::DegenerateArray => {
-            ReceiverError::InvalidConfig
-        }
-        OneStageError::TooManySatellites => ReceiverError::TooManySatellites,
-        _ => ReceiverError::InvalidInput,
-    }
 }

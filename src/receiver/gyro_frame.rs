@@ -11,11 +11,13 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::geometry::Quaternion;
+use crate::gyro::CalibrationError;
 use crate::gyro::{
     AttitudePropagator, BiasOnly, CalibratorConfig, EpochOutcome, GyroCalibrator,
     LeastSquaresAccumulator, PulseDecoder, ReferenceDriftModel, ResidualCentering, SqrtInformation,
 };
-use crate::{CalibrationError, Real, ReceiverError};
+use crate::receiver::ReceiverError;
+use crate::Real;
 
 use super::config::GyroConfig;
 
@@ -78,18 +80,17 @@ pub struct CalibrationReport {
 }
 
 impl GyroFrame {
-    pub fn new(config: GyroConfig) -> Result<Self, ReceiverError> {
+    pub fn new(config: GyroConfig) -> Result<Self, CalibrationError> {
         let decoder = match config.pulse_weight_rad {
-            Some(s) => Some(
-                PulseDecoder::new(s, ResidualCentering::IncrementCorrection)
-                    .map_err(|_| ReceiverError::InvalidConfig)?,
-            ),
+            Some(s) => Some(PulseDecoder::new(
+                s,
+                ResidualCentering::IncrementCorrection,
+            )?),
             None => None,
         };
         Ok(Self {
             config,
-            propagator: AttitudePropagator::new(Quaternion::identity())
-                .map_err(|_| ReceiverError::InvalidConfig)?,
+            propagator: AttitudePropagator::new(Quaternion::identity())?,
             decoder,
             samples: 0,
             rate: Vector3::zeros(),
@@ -118,7 +119,9 @@ impl GyroFrame {
 
     /// Decodes pulse counts into an increment (rad, gyro axes).
     pub fn decode(&mut self, counts: [i32; 3]) -> Result<Vector3<f32>, ReceiverError> {
-        let mut d = self.decoder.ok_or(ReceiverError::InvalidInput)?;
+        let mut d = self
+            .decoder
+            .ok_or(ReceiverError::Gyro(CalibrationError::InvalidConfig))?;
         let theta = d.decode(counts).map_err(map_calibration)?;
         self.decoder = Some(d);
         Ok(theta)
@@ -263,6 +266,6 @@ pub(crate) fn seconds(step: f32) -> f64 {
 fn map_calibration(e: CalibrationError) -> ReceiverError {
     match e {
         CalibrationError::NonFiniteInput => ReceiverError::NonFinite,
-        _ => ReceiverError::InvalidInput,
+        e => ReceiverError::Gyro(e),
     }
 }

@@ -95,11 +95,11 @@ mod window;
 #[cfg(test)]
 mod tests;
 
-pub use config::{GyroConfig, ReceiverConfig};
+pub use config::{ConfigError, GyroConfig, ReceiverConfig};
 pub use fine::FINE_STATES;
 pub use gyro_frame::{BiasCalibrator, CalibrationReport, NoReferenceDrift};
 pub use output::{AttitudeSource, ReceiverAttitude, ReceiverEvent, ReceiverHealth, StageEstimate};
-pub use receiver::{AttitudeReceiver, EVENT_QUEUE};
+pub use receiver::{AttitudeReceiver, ReceiverError, EVENT_QUEUE};
 pub use samples::{ChannelStatus, SampleFrontConfig, SampleReceiver, SampleReport};
 pub use satellite::SatelliteAiding;
 

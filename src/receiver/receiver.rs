@@ -10,10 +10,10 @@ use crate::attitude::range_model::{BaselineCorrelation, Baselines};
 use crate::attitude::rigid_body::RigidBodyFilter;
 use crate::attitude::snapshot::SnapshotSolver;
 use crate::geometry::{Euler321, Quaternion};
-use crate::ReceiverError;
 
 use super::antenna::AntennaMonitor;
 use super::carrier::body_baselines;
+use super::config::ConfigError;
 use super::config::ReceiverConfig;
 use super::fine::FineStage;
 use super::gyro_frame::{seconds, CalibrationReport, GyroFrame};
@@ -22,6 +22,10 @@ use super::output::{
 };
 use super::satellite::{SatelliteAiding, Slot};
 use super::MAX_SATELLITES;
+use crate::attitude::one_stage::OneStageError;
+use crate::error::{Error, ErrorKind};
+use crate::gyro::CalibrationError;
+use crate::tracking::{AcquisitionError, TrackingError};
 
 /// Events kept until read.
 pub const EVENT_QUEUE: usize = 32;
@@ -90,18 +94,18 @@ impl AttitudeReceiver {
     pub fn new(config: ReceiverConfig) -> Result<Self, ReceiverError> {
         config.validate()?;
         let antennas = config.antenna_positions();
+        BaselineArray::new(antennas).map_err(ConfigError::from)?;
         let baselines = body_baselines(&antennas);
-        let b = Baselines::new(baselines).map_err(|_| ReceiverError::InvalidConfig)?;
+        let b = Baselines::new(baselines).map_err(ConfigError::from)?;
         let solver = SnapshotSolver::new(b, BaselineCorrelation::shared_base_antenna());
-        let resolver = AmbiguityResolver::new(solver, config.ambiguity)
-            .map_err(|_| ReceiverError::InvalidConfig)?;
+        let resolver =
+            AmbiguityResolver::new(solver, config.ambiguity).map_err(ConfigError::from)?;
         // the stages that check their own configuration later are checked now
-        BaselineArray::new(antennas).map_err(|_| ReceiverError::InvalidConfig)?;
         if !config.fine.is_valid() {
-            return Err(ReceiverError::InvalidConfig);
+            return Err(ConfigError::Fine(OneStageError::InvalidConfig).into());
         }
         let gyro = match config.gyro {
-            Some(g) => Some(GyroFrame::new(g)?),
+            Some(g) => Some(GyroFrame::new(g).map_err(ConfigError::from)?),
             None => None,
         };
         Ok(Self {
@@ -195,7 +199,7 @@ impl AttitudeReceiver {
     /// [`ReceiverError::InvalidConfig`] without a gyro; [`ReceiverError::NonFinite`],
     /// [`ReceiverError::InvalidInput`] (above one radian). Unchanged on error.
     pub fn push_gyro_increment(&mut self, theta: &[f32; 3]) -> Result<(), ReceiverError> {
-        let gyro = self.gyro.as_mut().ok_or(ReceiverError::InvalidConfig)?;
+        let gyro = self.gyro.as_mut().ok_or(ReceiverError::NoGyro)?;
         gyro.push(&Vector3::from(*theta))?;
         self.after_gyro_sample();
         Ok(())
@@ -207,7 +211,7 @@ impl AttitudeReceiver {
     /// As [`Self::push_gyro_increment`]; [`ReceiverError::InvalidInput`] when the gyro has no
     /// pulse weight.
     pub fn push_gyro_pulses(&mut self, counts: [i32; 3]) -> Result<(), ReceiverError> {
-        let gyro = self.gyro.as_mut().ok_or(ReceiverError::InvalidConfig)?;
+        let gyro = self.gyro.as_mut().ok_or(ReceiverError::NoGyro)?;
         let mut g = gyro.clone();
         let theta = g.decode(counts)?;
         g.push(&theta)?;
@@ -656,5 +660,66 @@ impl AttitudeReceiver {
                 FineStage::start(&self.config, &q, &cov, m, rates, k).ok()
             }
         };
+    }
+}
+
+/// Errors of the attitude receiver ([`crate::receiver`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ReceiverError {
+    /// An input (observation, line of sight, gyro increment) was NaN or infinite.
+    #[error("non-finite receiver input")]
+    NonFinite,
+    /// The configuration was refused: the field at fault or the stage that refused it.
+    #[error("invalid receiver configuration")]
+    InvalidConfig(#[from] ConfigError),
+    /// An input is finite but unusable: a line of sight that is not a unit vector, a noise
+    /// variance that is not positive, a C/N0 outside 0..=90 dB-Hz.
+    #[error("receiver input out of range")]
+    InvalidInput,
+    /// A gyro sample arrived, but the configuration has no gyro.
+    #[error("no gyro configured")]
+    NoGyro,
+    /// The gyro stage refused a sample (non-finite, above one radian per sample, pulses
+    /// without a pulse weight).
+    #[error("gyro sample refused")]
+    Gyro(#[source] CalibrationError),
+    /// An observation arrived for a satellite without navigation aiding (no line of sight):
+    /// call [`crate::receiver::AttitudeReceiver::set_aiding`] first.
+    #[error("no line of sight for this satellite")]
+    NoAiding,
+    /// More satellites than the receiver has slots for.
+    #[error("no free satellite slot")]
+    TooManySatellites,
+    /// An observation arrived for an epoch the receiver has already closed.
+    #[error("observation for an epoch already closed")]
+    StaleEpoch,
+    /// The observation adapter refused a tracking epoch.
+    #[error("observation adapter refused")]
+    Adapter(#[source] OneStageError),
+    /// A software tracking channel refused a hand-over or a sample block.
+    #[error("tracking channel refused")]
+    Tracking(#[from] TrackingError),
+    /// The acquisition engine refused a search (too few samples, bad configuration).
+    #[error("acquisition refused")]
+    Acquisition(#[from] AcquisitionError),
+}
+
+impl Error for ReceiverError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::InvalidConfig(e) => e.kind(),
+            Self::Gyro(e) => e.kind(),
+            Self::InvalidInput
+            | Self::NoGyro
+            | Self::NoAiding
+            | Self::TooManySatellites
+            | Self::StaleEpoch => ErrorKind::InvalidInput,
+            Self::Adapter(e) => e.kind(),
+            Self::Tracking(e) => e.kind(),
+            Self::Acquisition(e) => e.kind(),
+        }
     }
 }

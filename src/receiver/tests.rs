@@ -62,8 +62,10 @@ fn gyro_frame_calibrates_a_bias_on_a_slow_spin() {
 
 use super::example::{ExampleFlight, NOISE_SIGMA};
 use super::{AttitudeReceiver, AttitudeSource, ReceiverEvent};
+use crate::attitude::array::ArrayError;
 use crate::attitude::one_stage::SatelliteObservation;
-use crate::ReceiverError;
+use crate::gyro::CalibrationError;
+use crate::receiver::{ConfigError, ReceiverError};
 
 fn events(r: &mut AttitudeReceiver) -> std::vec::Vec<ReceiverEvent> {
     let mut v = std::vec::Vec::new();
@@ -220,7 +222,7 @@ fn bad_inputs_are_refused_and_leave_the_receiver_unchanged() {
     );
     assert_eq!(
         r.push_gyro_increment(&[2.0, 0.0, 0.0]),
-        Err(ReceiverError::InvalidInput)
+        Err(ReceiverError::Gyro(CalibrationError::InputOutOfRange))
     );
     let mut aiding = f.aiding(300);
     aiding[0].los = [2.0, 0.0, 0.0];
@@ -231,13 +233,17 @@ fn bad_inputs_are_refused_and_leave_the_receiver_unchanged() {
     cfg.antennas_m[2] = cfg.antennas_m[1];
     assert_eq!(
         AttitudeReceiver::new(cfg).err(),
-        Some(ReceiverError::InvalidConfig)
+        Some(ReceiverError::InvalidConfig(ConfigError::Array(
+            ArrayError::CoincidentAntennas
+        )))
     );
     // a window that is not a whole number of gyro steps
     let mut cfg = ExampleFlight::config(true);
     cfg.window_epochs = 105;
     assert_eq!(
         AttitudeReceiver::new(cfg).err(),
-        Some(ReceiverError::InvalidConfig)
+        Some(ReceiverError::InvalidConfig(ConfigError::OutOfRange {
+            field: "window_epochs"
+        }))
     );
 }

@@ -20,5 +20,7 @@ pub mod selftest;
 
 pub use block::SampleBlock;
 pub use ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};
-pub use correlator::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, SlaveTaps, Taps};
-pub use samples::SampleFormat;
+pub use correlator::{
+    Correlator, CorrelatorConfig, EpochCorrelations, Iq, SignalError, SlaveTaps, Taps,
+};
+pub use samples::{SampleError, SampleFormat};

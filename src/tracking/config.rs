@@ -1,7 +1,7 @@
 //! Configuration of a tracking channel.
 
-use crate::error::TrackingError;
 use crate::signal::correlator::{CorrelatorConfig, SlaveTaps};
+use crate::tracking::TrackingError;
 
 /// Configuration of a channel (front end and loop parameters).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -18,5 +18,5 @@ pub mod lock;
 pub mod loops;
 mod refine;
 
-pub use acquisition::{Acquisition, AcquisitionConfig, SearchResult};
-pub use channel::{Channel, ChannelConfig, ChannelState, LockFlags, TrackingEpoch};
+pub use acquisition::{Acquisition, AcquisitionConfig, AcquisitionError, SearchResult};
+pub use channel::{Channel, ChannelConfig, ChannelState, LockFlags, TrackingEpoch, TrackingError};

@@ -199,7 +199,7 @@ fn solve_once(
 fn resolve_once(
     resolver: &gnss_attitude::attitude::ambiguity::AmbiguityResolver<2>,
     phases: &gnss_attitude::attitude::ambiguity::PhaseObservations<2, 12>,
-) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::AmbiguityError> {
+) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::attitude::ambiguity::AmbiguityError> {
     resolver.resolve(phases)
 }
 

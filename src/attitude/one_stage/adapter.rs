@@ -39,10 +39,10 @@
 //! gains): call [`OneStageFilter::reopen_line_biases`](super::OneStageFilter::reopen_line_biases)
 //! and [`ObservationAdapter::reset_noise`].
 
+use crate::attitude::one_stage::OneStageError;
 use crate::signal::correlator::Iq;
 use crate::signal::EpochCorrelations;
 use crate::tracking::{ChannelState, TrackingEpoch};
-use crate::OneStageError;
 
 use super::discriminator::PromptIq;
 use super::input::SatelliteObservation;

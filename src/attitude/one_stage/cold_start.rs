@@ -25,8 +25,8 @@
 
 use nalgebra::{Complex, Vector3};
 
+use crate::attitude::one_stage::OneStageError;
 use crate::attitude::range_model::PhaseSatellite;
-use crate::OneStageError;
 
 use super::input::SatelliteObservation;
 

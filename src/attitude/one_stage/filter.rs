@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::ekf::Ekf;
 use crate::geometry::Paper003Angles;
-use crate::{OneStageError, Real};
+use crate::Real;
 
 use super::config::{FilterMode, OneStageConfig};
 use super::information::{epoch_information, EpochInformation, PARAMETERS};
@@ -16,6 +16,10 @@ use super::lock::{LockDetector, LockStatus};
 use super::phase::PhaseModel;
 use super::prior::Prior;
 use crate::attitude::array::AntennaArray;
+use crate::attitude::array::ArrayError;
+use crate::ekf::FilterError;
+use crate::error::{Error, ErrorKind};
+use crate::geometry::GeometryError;
 
 /// What one epoch did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,9 +136,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
             }
             set(&mut p, *idx, *idx, variance);
         }
-        self.ekf
-            .set_covariance(p)
-            .map_err(|_| OneStageError::InvalidCovariance)
+        self.ekf.set_covariance(p).map_err(OneStageError::from)
     }
 
     fn initial_state(
@@ -171,7 +173,11 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
                 set(&mut p, *idx, *idx, v);
             }
         }
-        let ekf = Ekf::new(x, p).map_err(|_| OneStageError::InvalidCovariance)?;
+        let ekf = Ekf::new(x, p).map_err(|e| match e {
+            // the prior was checked finite above: what the toolkit refuses is its covariance
+            FilterError::InvalidCovariance => OneStageError::InvalidCovariance,
+            e => OneStageError::Filter(e),
+        })?;
         Ok((ekf, a))
     }
 
@@ -244,9 +250,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
                 *v = wrap(*v);
             }
         }
-        next.ekf
-            .set_state(x)
-            .map_err(|_| OneStageError::Numerical)?;
+        next.ekf.set_state(x)?;
         next.lock.update(
             info.coherent_power,
             info.aligned_power,
@@ -283,6 +287,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
             let c = obs.check(self.config.epoch_s)?;
             checked
                 .push(c)
+                // (the item handed back is dropped: the epoch is refused as a whole)
                 .map_err(|_| OneStageError::TooManySatellites)?;
         }
         let [a, b, g] = self.angles_of(x);
@@ -391,6 +396,82 @@ fn mask<T: Real>(info: &mut EpochInformation<T>, active: &[bool; PARAMETERS]) {
             info.observed.column_mut(k).fill(T::zero());
             info.expected.row_mut(k).fill(T::zero());
             info.expected.column_mut(k).fill(T::zero());
+        }
+    }
+}
+
+/// Errors of the one-stage attitude filter ([`crate::attitude::one_stage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum OneStageError {
+    /// An observation, prior, configuration or antenna position held NaN or infinity.
+    #[error("non-finite one-stage filter input")]
+    NonFiniteInput,
+    /// A configuration value is outside its domain: a non-positive wavelength, epoch or
+    /// bandwidth, a negative process noise, a lock threshold outside `(0, 1]`, no estimated
+    /// angle.
+    #[error("invalid one-stage filter configuration")]
+    InvalidConfig,
+    /// The antenna array is degenerate: two antennas coincide or all three are collinear.
+    #[error("antenna array is degenerate (coincident or collinear)")]
+    DegenerateArray,
+    /// An observation is unusable: a line of sight that is not a unit vector (length off by more
+    /// than 1e-3), a noise variance that is not positive, or a C/N0 outside 0..=90 dB-Hz.
+    #[error("unusable satellite observation")]
+    InvalidObservation,
+    /// More satellites in one epoch than [`MAX_SATELLITES`](crate::attitude::one_stage::MAX_SATELLITES).
+    #[error("too many satellites in one epoch")]
+    TooManySatellites,
+    /// A prior covariance is not symmetric positive definite.
+    #[error("prior covariance is not positive definite")]
+    InvalidCovariance,
+    /// The prior attitude is at the gimbal lock of the paper's angles (`cos β` below 1e-3),
+    /// where a rotation-vector covariance cannot be mapped onto α, β, γ.
+    #[error("prior attitude at the gimbal lock of the paper's angles")]
+    GimbalLock,
+    /// A snapshot solution offered as the prior is not of
+    /// [`SnapshotQuality::Good`](crate::attitude::snapshot::SnapshotQuality::Good) (its
+    /// residuals failed the χ² test or its iteration did not converge).
+    #[error("snapshot solution not good enough for a prior")]
+    UnusableSnapshot,
+    /// The filter step produced non-finite numbers or lost definiteness from finite input; the
+    /// filter is unchanged.
+    #[error("one-stage filter step failed numerically")]
+    Numerical,
+    /// The Kalman filter toolkit refused a step (prediction, update or state) from finite
+    /// input: overflow or loss of definiteness.
+    #[error("filter step refused")]
+    Filter(#[from] FilterError),
+    /// A rotation handed to the filter (an anchor, a prior attitude) could not be normalized
+    /// or is not a rotation.
+    #[error("rotation refused")]
+    Geometry(#[from] GeometryError),
+}
+
+impl Error for OneStageError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFiniteInput => ErrorKind::NonFinite,
+            Self::InvalidConfig
+            | Self::DegenerateArray
+            | Self::InvalidObservation
+            | Self::TooManySatellites => ErrorKind::InvalidInput,
+            Self::InvalidCovariance => ErrorKind::NotPositiveDefinite,
+            Self::GimbalLock => ErrorKind::Unobservable,
+            Self::UnusableSnapshot => ErrorKind::InvalidInput,
+            Self::Numerical => ErrorKind::Numerical,
+            Self::Geometry(e) => e.kind(),
+            Self::Filter(e) => e.kind(),
+        }
+    }
+}
+
+impl From<ArrayError> for OneStageError {
+    fn from(e: ArrayError) -> Self {
+        match e {
+            ArrayError::NonFinite => Self::NonFiniteInput,
+            ArrayError::CoincidentAntennas | ArrayError::CollinearAntennas => Self::DegenerateArray,
         }
     }
 }

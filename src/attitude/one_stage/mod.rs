@@ -115,7 +115,7 @@ pub use discriminator::{
     coherent_sum, difference_basis, floored_plane_curvature, satellite_terms, PromptIq,
     SatelliteTerms,
 };
-pub use filter::{EpochReport, OneStageFilter};
+pub use filter::{EpochReport, OneStageError, OneStageFilter};
 pub use information::{EpochInformation, PARAMETERS};
 pub use input::{SatelliteObservation, MAX_SATELLITES};
 pub use layout::StateLayout;

@@ -3,9 +3,10 @@
 
 use nalgebra::{Cholesky, Matrix3, Vector3};
 
+use crate::attitude::one_stage::OneStageError;
 use crate::attitude::snapshot::{SnapshotQuality, SnapshotSolution};
 use crate::geometry::{vee, Paper003Angles};
-use crate::{real, OneStageError, Real};
+use crate::{real, Real};
 
 use super::phase::paper003_partials;
 
@@ -65,7 +66,7 @@ impl<T: Real> Prior<T> {
         {
             return Err(OneStageError::NonFiniteInput);
         }
-        let angles = Paper003Angles::from_dcm(c_rb).map_err(|_| OneStageError::NonFiniteInput)?;
+        let angles = Paper003Angles::from_dcm(c_rb)?;
         if angles.beta.cos().abs() < real(1e-3) {
             return Err(OneStageError::GimbalLock);
         }

@@ -3,7 +3,8 @@
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use crate::{real, OneStageError, Real};
+use crate::attitude::one_stage::OneStageError;
+use crate::{real, Real};
 
 use super::config::ProcessNoise;
 use super::filter::OneStageFilter;
@@ -22,9 +23,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         info: &EpochInformation<T>,
     ) -> Result<(), OneStageError> {
         let q = self.process_noise(info);
-        self.ekf
-            .predict_to(x_pred, f, &q)
-            .map_err(|_| OneStageError::Numerical)?;
+        self.ekf.predict_to(x_pred, f, &q)?;
         if info.satellites == 0 {
             return Ok(());
         }
@@ -40,17 +39,15 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
                 add(&mut ct_u, col, info.gradient[k]);
             }
         }
-        self.ekf
-            .update(
-                &SVector::<T, PARAMETERS>::zeros(),
-                &h,
-                &SMatrix::identity(),
-                None,
-            )
-            .map_err(|_| OneStageError::Numerical)?;
+        self.ekf.update(
+            &SVector::<T, PARAMETERS>::zeros(),
+            &h,
+            &SMatrix::identity(),
+            None,
+        )?;
         // eq. (9): X̂ = X̃ + D_X cᵀ u
         let x = x_pred + self.ekf.covariance() * ct_u;
-        self.ekf.set_state(x).map_err(|_| OneStageError::Numerical)
+        Ok(self.ekf.set_state(x)?)
     }
 
     /// `G D_ξ Gᵀ` of eq. (11) for this epoch (see [`ProcessNoise`]).
@@ -135,6 +132,6 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
                 }
             }
         }
-        self.ekf.set_state(x).map_err(|_| OneStageError::Numerical)
+        Ok(self.ekf.set_state(x)?)
     }
 }

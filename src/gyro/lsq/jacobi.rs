@@ -3,7 +3,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::{CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::Real;
 
 /// Upper bound on the sweeps of the one-sided Jacobi iteration. One sweep rotates every pair of
 /// columns once (`X (X − 1) / 2` rotations of `O(X)` work); the iteration converges

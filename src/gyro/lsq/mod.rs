@@ -25,7 +25,8 @@ mod sqrt_information;
 
 use nalgebra::SVector;
 
-use crate::{real, CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::{real, Real};
 
 pub use jacobi::{singular_values, JACOBI_MAX_SWEEPS};
 pub use normal_equations::NormalEquations;

@@ -2,7 +2,8 @@
 
 use nalgebra::{Cholesky, SMatrix, SVector};
 
-use crate::{CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::Real;
 
 use super::{
     check_row, check_tolerance, inverse_scales, sigma0, singular_values, LeastSquaresAccumulator,

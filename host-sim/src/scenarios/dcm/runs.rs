@@ -111,7 +111,7 @@ impl Track {
     fn record<T: Real>(
         &mut self,
         at: &At<'_>,
-        result: Result<FilterEstimate<T>, gnss_attitude::DcmError>,
+        result: Result<FilterEstimate<T>, gnss_attitude::attitude::dcm_filter::DcmError>,
     ) {
         let At {
             step,
@@ -287,14 +287,18 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
             .map(|e| to_f64(&e.c_rb));
         match multi_result {
             Ok(m) => {
-                let six = m.structures[0].ok_or(gnss_attitude::DcmError::NotARotation);
+                let six = m.structures[0]
+                    .ok_or(gnss_attitude::attitude::dcm_filter::DcmError::NotARotation);
                 out.six_state.record(&at, six);
                 for (track, e) in out.structures_b13.iter_mut().zip(&m.structures[1..]) {
                     let quiet = At {
                         keep_series: false,
                         ..at
                     };
-                    track.record(&quiet, e.ok_or(gnss_attitude::DcmError::NotARotation));
+                    track.record(
+                        &quiet,
+                        e.ok_or(gnss_attitude::attitude::dcm_filter::DcmError::NotARotation),
+                    );
                 }
                 for (c, i) in out.inlier_counts.iter_mut().zip(m.inliers) {
                     *c += usize::from(i);

@@ -417,7 +417,7 @@ pub fn fly(
             let obs = ch.observe(k, tc, s, psi, line_bias, &mut rng);
             match rx.receiver_mut().push_observation(k, &obs) {
                 Ok(()) => tracked += 1,
-                Err(gnss_attitude::ReceiverError::NoAiding) => {}
+                Err(gnss_attitude::receiver::ReceiverError::NoAiding) => {}
                 Err(e) => anyhow::bail!("observation: {e}"),
             }
         }

@@ -18,6 +18,7 @@
 //! (rotation-angle error of fixed epochs); the same prefixed `lambda_` and `round_` for the
 //! comparison methods; search effort (`nodes_mean`, `nodes_max`, `candidates_mean`).
 
+use gnss_attitude::attitude::ambiguity::AmbiguityError;
 use gnss_attitude::attitude::ambiguity::{
     AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite, SearchMode,
     GPS_L1_WAVELENGTH_M,
@@ -27,7 +28,6 @@ use gnss_attitude::attitude::range_model::{
 };
 use gnss_attitude::attitude::snapshot::{SnapshotQuality, SnapshotSolver};
 use gnss_attitude::geometry::rotation_angle;
-use gnss_attitude::AmbiguityError;
 use nalgebra::{Matrix3, Vector3};
 use rand::seq::SliceRandom;
 use rayon::prelude::*;

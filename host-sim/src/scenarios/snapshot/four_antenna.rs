@@ -9,9 +9,9 @@
 
 use gnss_attitude::attitude::paper002::paper_formula;
 use gnss_attitude::attitude::range_model::{BaselineCorrelation, Baselines};
+use gnss_attitude::attitude::snapshot::SnapshotError;
 use gnss_attitude::attitude::snapshot::SnapshotSolver;
 use gnss_attitude::geometry::{rotation_angle, Euler321};
-use gnss_attitude::SnapshotError;
 use nalgebra::SMatrix;
 use rayon::prelude::*;
 use serde_json::json;
