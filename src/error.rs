@@ -1,9 +1,13 @@
-//! The crate's errors.
+//! What the crate's errors have in common.
 //!
-//! Each module that can fail has one small `#[non_exhaustive]` enum here, whose variants name a
-//! cause and document when it happens. Generic code (a supervisor that only wants to know whether
-//! to retry, re-initialize or give up) matches on [`ErrorKind`] through [`Error::kind`] instead of
-//! on every variant, in the style of `embedded-hal`.
+//! Each error lives next to the operation that raises it (`SnapshotSolver::solve` returns a
+//! [`SnapshotError`](crate::attitude::snapshot::SnapshotError), `AttitudeReceiver::new` a
+//! [`ReceiverError`](crate::receiver::ReceiverError) whose `InvalidConfig` names the field or
+//! keeps the refusing stage's error as its source). Each is a small `#[non_exhaustive]` enum
+//! whose variants name a cause and document when it happens. Generic code (a supervisor that
+//! only wants to know whether to retry, re-initialize or give up) matches on [`ErrorKind`]
+//! through [`Error::kind`] instead of on every variant, in the style of `embedded-hal`; a
+//! wrapping error reports its source's kind.
 //!
 //! A call that returns an error leaves the object it was called on unchanged.
 

@@ -85,9 +85,6 @@ pub mod selftest;
 pub mod signal;
 pub mod tracking;
 
-#[cfg(feature = "defmt")]
-mod defmt_impls;
-
 /// The real scalar type the numerical code is generic over: `f32` on the target, `f64` in the
 /// reference runs of the tests.
 ///

@@ -26,6 +26,7 @@ pub const SELF_TEST_SIGMA_ACC: f32 = 0.2;
 /// The self-test model: a point moving in a plane with constant velocity plus white
 /// acceleration; state `(p_x, p_y, v_x, v_y)` in metres and m/s, position measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ConstantVelocityModel {
     /// Transition matrix for one step.
     pub f: Matrix4<f32>,

@@ -104,6 +104,7 @@ impl<T: Real> AmbiguityConfig<T> {
 
 /// A validated integer fix and the attitude it gives.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AmbiguityFix<const M: usize, const N: usize, T = f32> {
     /// Integer ambiguities `z_ij` (cycles) per baseline `i` and satellite `j` in input order
     /// (entries past the number of satellites are 0).
@@ -124,6 +125,7 @@ pub struct AmbiguityFix<const M: usize, const N: usize, T = f32> {
 
 /// Integer ambiguity resolution plus snapshot attitude, for `M` baselines.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AmbiguityResolver<const M: usize, T = f32> {
     solver: SnapshotSolver<M, T>,
     config: AmbiguityConfig<T>,

@@ -96,6 +96,7 @@ impl BaselinePair {
 /// does not depend on the choice of origin (the common carrier phase is averaged out), only
 /// the filter's internal phases do.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AntennaArray<T = f32> {
     positions: [Vector3<T>; 3],
 }

@@ -19,6 +19,7 @@ pub use super::array::{AntennaArray, BaselinePair, MIN_BASELINE_LENGTH};
 /// divided by `Δt`: the central difference for the middle of the step); the baselines are
 /// measured **at `t_k`**.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BaselineEpoch<T = f32> {
     /// Measured baselines `r_i − r_j` at the end of the step, reference frame, metres
     /// (`ξ_ij, η_ij, ζ_ij` of eq. (8)).

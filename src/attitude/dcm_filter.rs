@@ -87,6 +87,7 @@ impl<T: Real> DcmFilterConfig<T> {
 
 /// The six-state direction-cosine EKF (paper 000, eq. (10), corrected model).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DirectionCosineFilter<T: Real = f32> {
     model: DirectionCosineModel<T>,
     config: DcmFilterConfig<T>,

@@ -50,6 +50,7 @@ pub const MIN_NORMAL_RATIO: f64 = 5e-3;
 
 /// The six-state model for one pair of baselines.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DirectionCosineModel<T = f32> {
     /// Eliminated column `k` (0-based body axis).
     eliminated: usize,

@@ -22,6 +22,7 @@ pub const LAMBDA_MAX_ITERATIONS: usize = 512;
 
 /// The decorrelated factorization `Zᵀ Q Z = Lᵀ D L`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Decorrelation<const N: usize, T = f32> {
     /// Dimension in use (`≤ N`).
     pub n: usize,

@@ -62,6 +62,7 @@ pub struct RigidBodyConfig<T = f32> {
 
 /// The rigid-body error-state filter.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RigidBodyFilter<T: Real = f32> {
     /// Body-axes baselines `b₁₂, b₂₃, b₁₃`, metres.
     baselines: [Vector3<T>; 3],

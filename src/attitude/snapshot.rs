@@ -53,6 +53,7 @@ pub enum SnapshotQuality {
 
 /// The result of one snapshot solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SnapshotSolution<T = f32> {
     /// Attitude `C_rb`, body to reference (paper 002's `A` is its transpose).
     pub c_rb: Matrix3<T>,
@@ -116,6 +117,7 @@ pub(crate) struct BaselineFit<T> {
 
 /// Single-epoch maximum-likelihood attitude from range differences on `M ≥ 2` baselines.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SnapshotSolver<const M: usize, T = f32> {
     baselines: Baselines<M, T>,
     correlation: BaselineCorrelation<M, T>,

@@ -28,6 +28,7 @@ use super::eigen::symmetric_eigen;
 
 /// One vector pair of Wahba's problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WahbaPair<T = f32> {
     /// The vector in body axes (any length; it is used as given).
     pub body: Vector3<T>,
@@ -39,6 +40,7 @@ pub struct WahbaPair<T = f32> {
 
 /// The solution of Wahba's problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WahbaSolution<T = f32> {
     /// The optimal attitude `q_rb` (body to reference), unit, scalar part `≥ 0`.
     pub q_rb: Quaternion<T>,
@@ -52,6 +54,7 @@ pub struct WahbaSolution<T = f32> {
 /// the gain. Add pairs with [`WahbaProblem::add`], then [`WahbaProblem::solve`]. No buffer of
 /// pairs is kept.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WahbaProblem<T = f32> {
     b: Matrix3<T>,
     z: Vector3<T>,

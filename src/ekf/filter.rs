@@ -25,6 +25,7 @@ use crate::error::{Error, ErrorKind};
 /// * **transactional steps**: every input is checked for finiteness and every result is checked
 ///   before it is committed, so a step that fails leaves the filter exactly as it was.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Ekf<const N: usize, T = f32> {
     x: SVector<T, N>,
     p: SMatrix<T, N, N>,
@@ -33,6 +34,7 @@ pub struct Ekf<const N: usize, T = f32> {
 
 /// Result of a vector update.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct UpdateReport<const M: usize, T = f32> {
     /// The innovation `y = z − h(x̂)` that was offered, in measurement units.
     pub innovation: SVector<T, M>,
@@ -61,6 +63,7 @@ pub struct ScalarUpdateReport<T = f32> {
 
 /// Result of a sequential update of `M` scalar measurements.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SequentialUpdateReport<const M: usize, T = f32> {
     /// NIS of each scalar measurement at the moment it was processed.
     pub nis: SVector<T, M>,

@@ -32,6 +32,7 @@ use crate::error::{Error, ErrorKind};
 /// [`Self::add_reference`] belongs to the time of the last increment, which must complete a
 /// propagation step (an even number of samples since `t₀`).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct GyroCalibrator<G, R, A, const CM: usize, const DN: usize, const X: usize, T = f32> {
     config: CalibratorConfig<T>,
     model: G,

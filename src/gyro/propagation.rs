@@ -21,6 +21,7 @@ pub fn two_sample_rotation_vector<T: Real>(theta1: &Vector3<T>, theta2: &Vector3
 
 /// What one completed propagation step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PropagationStep<T = f32> {
     /// Sum of the two increments of the step, `θ₁ + θ₂` (rad, gyro axes).
     pub increment: Vector3<T>,
@@ -37,6 +38,7 @@ pub struct PropagationStep<T = f32> {
 /// every [`FOLD_ANGLE`] of rotation. In `f32` this makes the propagated attitude about ten
 /// times more accurate than composing every step into `M` (whose components are `O(1)`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AttitudePropagator<T = f32> {
     anchor: Quaternion<T>,
     delta: Quaternion<T>,

@@ -49,6 +49,7 @@ pub fn antennas() -> [[f32; 3]; 3] {
 
 /// A flight: the truth and the generator of its observations.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExampleFlight {
     rng: SplitMix64,
     normal: StandardNormal,

@@ -23,6 +23,7 @@ use super::config::GyroConfig;
 
 /// The reference (GNSS attitude) does not drift: no drift unknowns (`n = 0`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct NoReferenceDrift;
 
 impl<T: Real> ReferenceDriftModel<T, 0> for NoReferenceDrift {

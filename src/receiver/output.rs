@@ -51,6 +51,7 @@ pub struct ReceiverHealth {
 
 /// An attitude with its uncertainty.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct StageEstimate {
     /// Epoch the estimate belongs to.
     pub epoch: u64,
@@ -62,6 +63,7 @@ pub struct StageEstimate {
 
 /// The receiver's attitude, as [`super::AttitudeReceiver::attitude`] reports it.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ReceiverAttitude {
     /// Epoch the attitude belongs to.
     pub epoch: u64,

@@ -42,6 +42,24 @@ pub struct PhaseDifferences {
     epochs: u32,
 }
 
+/// Summarised on purpose: the sums as `(re, im)` pairs (num-complex has no defmt support).
+#[cfg(feature = "defmt")]
+impl defmt::Format for PhaseDifferences {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        let [b, c] = self.sum;
+        defmt::write!(
+            f,
+            "PhaseDifferences {{ id: {=u8}, epochs: {=u32}, B: ({=f32}, {=f32}), C: ({=f32}, {=f32}) }}",
+            self.id,
+            self.epochs,
+            b.re,
+            b.im,
+            c.re,
+            c.im
+        );
+    }
+}
+
 impl PhaseDifferences {
     /// An empty average.
     pub fn new() -> Self {

@@ -55,6 +55,7 @@ pub struct EpochReport<T = f32> {
 /// (`[α, β, γ, α̇, β̇, γ̇, b_B, b_C]`, the default); see [`StateLayout`]. Angles not estimated
 /// are held at their prior values. Angles are wrapped to `(−π, π]`.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct OneStageFilter<T = f32, const N: usize = 8> {
     pub(super) config: OneStageConfig<T>,
     pub(super) array: AntennaArray<T>,

@@ -16,6 +16,7 @@ pub const PARAMETERS: usize = 5;
 
 /// The epoch's sums over satellites, in the parameter order α, β, γ, `b_B`, `b_C` (radians).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EpochInformation<T = f32> {
     /// `∂F/∂θ`: for the angles the discriminator `u_α = (∂Ψ/∂α)ᵀ u_ψ` of eq. (32) (the `2π/λ`
     /// included), for the biases `Σ_i ∂F_i/∂ψ_{B,i}` and `Σ_i ∂F_i/∂ψ_{C,i}`. 1/rad.

@@ -12,6 +12,7 @@ use super::phase::paper003_partials;
 
 /// Mean and covariance the filter starts from.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Prior<T = f32> {
     /// The attitude angles α, β, γ of eq. (2), rad.
     pub angles: Paper003Angles<T>,

@@ -91,6 +91,7 @@ pub fn default_rank_tolerance<T: Real>() -> T {
 /// which does not depend on the units; the condition number of `U` itself is reported too
 /// (the paper's §6 figure).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ObservabilityReport<const X: usize, T = f32> {
     /// Singular values of `U` in descending order (units of the rows).
     pub singular_values: SVector<T, X>,
@@ -146,6 +147,7 @@ pub(crate) fn inverse_scales<T: Real, const X: usize>(d: &SVector<T, X>) -> SVec
 
 /// A least-squares solution.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LsqSolution<const X: usize, T = f32> {
     /// The estimate `x̂` minimizing `‖U x − Z‖²`.
     pub x: SVector<T, X>,

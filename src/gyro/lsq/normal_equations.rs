@@ -19,6 +19,7 @@ use super::{
 /// below `√ε` relative cannot be told from rounding. Kept next to [`super::SqrtInformation`]
 /// (same memory) to show that difference.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct NormalEquations<const X: usize, T = f32> {
     /// `UᵀU`, upper triangle maintained (the lower one is filled at solve time).
     n: SMatrix<T, X, X>,

@@ -23,6 +23,7 @@ use super::{
 /// next with [`Self::marginalize`] (for example the gyro errors `c`, when a long calibration is
 /// re-anchored on a new reference epoch and `w₀` starts afresh).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SqrtInformation<const X: usize, T = f32> {
     r: SMatrix<T, X, X>,
     y: SVector<T, X>,
