@@ -42,7 +42,8 @@
 //! | [`gyro`] | Gyro propagation and in-flight calibration against a reference attitude (paper 001) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
-//! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
+//! | [`linalg`] | Bounded eigen-decomposition, SVD, Givens QR and semi-definite factorization of small matrices |
+//! | [`error`] | What every error has in common: the [`error::Error`] trait and its [`error::ErrorKind`] (each error lives next to its operation) |
 //!
 //! # Frames and units
 //!
@@ -79,6 +80,7 @@ pub mod error;
 pub mod frontend;
 pub mod geometry;
 pub mod gyro;
+pub mod linalg;
 pub mod noise;
 pub mod receiver;
 pub mod selftest;

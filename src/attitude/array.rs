@@ -209,7 +209,7 @@ pub enum ArrayError {
     #[error("non-finite antenna position")]
     NonFinite,
     /// Two antennas are closer than
-    /// [`MIN_BASELINE_LENGTH`](crate::attitude::array::MIN_BASELINE_LENGTH) (or a triangle
+    /// [`MIN_BASELINE_LENGTH`] (or a triangle
     /// side is shorter than that, or negative).
     #[error("two antennas (nearly) coincide")]
     CoincidentAntennas,

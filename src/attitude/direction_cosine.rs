@@ -26,7 +26,7 @@ use crate::attitude::dcm_filter::DcmError;
 use crate::geometry::{skew, vee};
 use crate::{real, Real};
 
-pub(crate) use super::givens::givens_inverse;
+pub(crate) use crate::linalg::givens_inverse;
 
 /// Which column of `M` the state leaves out (and recovers as the cross product of the other
 /// two).
@@ -62,12 +62,12 @@ pub struct DirectionCosineModel<T = f32> {
 
 /// Relabels body-axis components cyclically so that axis `k` comes first.
 fn to_model_axes<T: Real>(v: &Vector3<T>, k: usize) -> Vector3<T> {
-    Vector3::from_fn(|j, _| v.get((k + j) % 3).copied().unwrap_or_else(T::zero))
+    Vector3::from_fn(|j, _| v[(k + j) % 3])
 }
 
 /// Inverse of [`to_model_axes`].
 fn from_model_axes<T: Real>(v: &Vector3<T>, k: usize) -> Vector3<T> {
-    Vector3::from_fn(|i, _| v.get((i + 3 - k) % 3).copied().unwrap_or_else(T::zero))
+    Vector3::from_fn(|i, _| v[(i + 3 - k % 3) % 3])
 }
 
 /// Index in `Y` of row `i` of column `c₂` (`second = false`) or `c₃` (`second = true`).

@@ -9,7 +9,7 @@
 //! assert_eq!(fix.ambiguities[0][0], example::ambiguity(0, 0));
 //! let truth = example::attitude().to_quaternion();
 //! assert!(fix.solution.q_rb.angle_to(&truth) < 0.02);
-//! # Ok::<(), gnss_attitude::AmbiguityError>(())
+//! # Ok::<(), gnss_attitude::attitude::ambiguity::AmbiguityError>(())
 //! ```
 
 use nalgebra::Vector3;

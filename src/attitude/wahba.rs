@@ -16,7 +16,7 @@
 //! construction: the q-method cannot return `det C = −1`. It is exact for rank-2 profile
 //! matrices (two vector pairs), where `B` has a zero singular value: the top eigenvalue of `K`
 //! stays separated from the next by `2 σ₂(B)`. The eigen-decomposition is the bounded cyclic
-//! Jacobi of [`super::eigen`] (at most [`super::eigen::JACOBI_MAX_SWEEPS`] sweeps).
+//! Jacobi of [`crate::linalg::symmetric_eigen`] (at most [`crate::linalg::EIGEN_MAX_SWEEPS`] sweeps).
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -24,7 +24,7 @@ use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::Quaternion;
 use crate::{real, Real};
 
-use super::eigen::symmetric_eigen;
+use crate::linalg::symmetric_eigen;
 
 /// One vector pair of Wahba's problem.
 #[derive(Clone, Copy, Debug, PartialEq)]

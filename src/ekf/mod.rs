@@ -25,7 +25,7 @@
 //!     kf.update(&y, &h, &r, gate)?;
 //! }
 //! assert!((kf.state().y - 2.0).abs() < 0.3);
-//! # Ok::<(), gnss_attitude::FilterError>(())
+//! # Ok::<(), gnss_attitude::ekf::FilterError>(())
 //! ```
 
 mod filter;

@@ -32,7 +32,7 @@
 //! Pure maths on finite numbers (products, [`Quaternion::rotate`], [`Quaternion::from_rotation_vector`])
 //! is total: finite input gives finite output. Conversions from data that may be corrupt
 //! ([`Quaternion::from_dcm`], [`Euler321::from_dcm`], [`nearest_rotation`]) check their input and
-//! return [`GeometryError`](crate::geometry::GeometryError). No conversion produces NaN at a singularity:
+//! return [`GeometryError`]. No conversion produces NaN at a singularity:
 //! gimbal lock and the 180° rotation are handled explicitly.
 
 mod dcm;
@@ -46,6 +46,21 @@ pub use dcm::{
 };
 pub use euler::{Euler321, Paper003Angles};
 pub use quaternion::Quaternion;
+
+/// `angle` (rad) wrapped to `(−π, π]`.
+pub fn wrap_angle<T: crate::Real>(angle: T) -> T {
+    let pi = T::pi();
+    if angle > -pi && angle <= pi {
+        return angle;
+    }
+    let two_pi = T::two_pi();
+    let w = angle - two_pi * ((angle + pi) / two_pi).floor();
+    if w <= -pi {
+        w + two_pi
+    } else {
+        w
+    }
+}
 
 /// Errors of the geometry routines ([`crate::geometry`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
@@ -73,6 +88,25 @@ impl Error for GeometryError {
             Self::NonFinite => ErrorKind::NonFinite,
             Self::ZeroLength | Self::NotARotation => ErrorKind::InvalidInput,
             Self::NotConverged => ErrorKind::NotConverged,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_angle as wrap;
+
+    #[test]
+    fn wrap_maps_onto_minus_pi_to_pi() {
+        use core::f64::consts::PI;
+        for (a, w) in [
+            (0.5, 0.5),
+            (PI, PI),
+            (-PI, PI),
+            (3.0 * PI, PI),
+            (7.0, 7.0 - 2.0 * PI),
+        ] {
+            assert!((wrap(a) - w).abs() < 1e-12, "{a}");
         }
     }
 }

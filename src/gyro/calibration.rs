@@ -13,6 +13,7 @@ use super::error_model::{ErrorQuadratures, GyroErrorModel, ReferenceDriftModel};
 use super::lsq::{check_row, LeastSquaresAccumulator};
 use super::propagation::{AttitudePropagator, PulseDecoder, ResidualCentering};
 use crate::error::{Error, ErrorKind};
+use crate::linalg::LinalgError;
 
 /// In-flight gyro calibration against a reference attitude (paper 001).
 ///
@@ -429,13 +430,22 @@ pub enum CalibrationError {
         rank: u16,
     },
     /// The one-sided Jacobi singular-value iteration did not converge within
-    /// [`crate::gyro::JACOBI_MAX_SWEEPS`] sweeps.
+    /// [`crate::linalg::SVD_MAX_SWEEPS`] sweeps.
     #[error("Jacobi singular values did not converge")]
     NotConverged,
     /// The normal matrix passed the rank test but has no Cholesky factor: rounding destroyed
     /// its definiteness (normal equations square the condition number).
     #[error("normal matrix lost positive definiteness")]
     NotPositiveDefinite,
+}
+
+impl From<LinalgError> for CalibrationError {
+    fn from(e: LinalgError) -> Self {
+        match e {
+            LinalgError::NonFinite => Self::NonFiniteInput,
+            LinalgError::NotConverged => Self::NotConverged,
+        }
+    }
 }
 
 impl Error for CalibrationError {

@@ -38,7 +38,7 @@
 //! use gnss_attitude::gyro::{CalibratorConfig, PaperCalibrator, SqrtInformation};
 //! use nalgebra::Vector3;
 //!
-//! # fn main() -> Result<(), gnss_attitude::CalibrationError> {
+//! # fn main() -> Result<(), gnss_attitude::gyro::CalibrationError> {
 //! let h = 0.02; // gyro sample interval, s
 //! let mut cal = PaperCalibrator::<SqrtInformation<15>>::paper(
 //!     CalibratorConfig::new(h),
@@ -81,7 +81,7 @@ pub use error_model::{
 };
 pub use lsq::{
     default_rank_tolerance, LeastSquaresAccumulator, LsqSolution, NormalEquations,
-    ObservabilityReport, SqrtInformation, JACOBI_MAX_SWEEPS, MAX_ROW_ENTRY,
+    ObservabilityReport, SqrtInformation, MAX_ROW_ENTRY,
 };
 pub use propagation::{
     two_sample_rotation_vector, AttitudePropagator, PropagationStep, PulseDecoder,

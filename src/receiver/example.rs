@@ -13,7 +13,7 @@
 //! assert_eq!(att.source, AttitudeSource::OneStage);
 //! let truth = flight.attitude(att.epoch);
 //! assert!(att.q_rb.angle_to(&truth) < 0.2f32.to_radians());
-//! # Ok::<(), gnss_attitude::ReceiverError>(())
+//! # Ok::<(), gnss_attitude::receiver::ReceiverError>(())
 //! ```
 
 use nalgebra::Vector3;

@@ -19,8 +19,9 @@ use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use gnss_attitude::attitude::multi_structure::{fuse, MultiStructureFilter};
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
+use gnss_attitude::linalg::singular_values;
 use gnss_attitude::gyro::{
-    lsq::singular_values, AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
+    AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
     GyroCalibrator, LeastSquaresAccumulator, NormalEquations, PaperCalibrator, PulseDecoder,
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
 };

@@ -42,12 +42,12 @@ pub struct EpochInformation<T = f32> {
 impl<T: Real> EpochInformation<T> {
     /// The angle block `J_αα` of [`Self::expected`], 1/rad².
     pub fn expected_angles(&self) -> Matrix3<T> {
-        Matrix3::from_fn(|i, j| self.expected.get((i, j)).copied().unwrap_or_else(T::zero))
+        self.expected.fixed_view::<3, 3>(0, 0).into_owned()
     }
 
     /// The angle part `u_α` of [`Self::gradient`] (eq. (32)), 1/rad.
     pub fn angle_gradient(&self) -> Vector3<T> {
-        Vector3::from_fn(|i, _| self.gradient.get(i).copied().unwrap_or_else(T::zero))
+        self.gradient.fixed_rows::<3>(0).into_owned()
     }
 }
 

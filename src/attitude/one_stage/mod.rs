@@ -93,7 +93,6 @@ mod filter;
 mod information;
 mod input;
 mod layout;
-mod linalg;
 pub mod lock;
 mod phase;
 mod prior;

@@ -19,7 +19,6 @@
 //! bounded one-sided Jacobi iteration), and [`LeastSquaresAccumulator::solve`] returns
 //! [`CalibrationError::Unobservable`] instead of an answer when the rank is deficient.
 
-mod jacobi;
 mod normal_equations;
 mod sqrt_information;
 
@@ -28,7 +27,6 @@ use nalgebra::SVector;
 use crate::gyro::CalibrationError;
 use crate::{real, Real};
 
-pub use jacobi::{singular_values, JACOBI_MAX_SWEEPS};
 pub use normal_equations::NormalEquations;
 pub use sqrt_information::SqrtInformation;
 

@@ -3,11 +3,12 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::gyro::CalibrationError;
+use crate::linalg::singular_values;
 use crate::Real;
 
 use super::{
-    check_row, check_tolerance, inverse_scales, sigma0, singular_values, LeastSquaresAccumulator,
-    LsqSolution, ObservabilityReport,
+    check_row, check_tolerance, inverse_scales, sigma0, LeastSquaresAccumulator, LsqSolution,
+    ObservabilityReport,
 };
 
 /// Sequential least squares in square-root information form.
