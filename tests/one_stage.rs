@@ -3,9 +3,10 @@
 //! 30°, satellites coming and going, line biases, f32 against f64, and the physics of the
 //! discriminator (slope and Fisher information against host-sim's own computation).
 
+use gnss_attitude::attitude::array::AntennaArray;
 use gnss_attitude::attitude::one_stage::OneStageError;
 use gnss_attitude::attitude::one_stage::{
-    AntennaArray, EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
+    EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
     SatelliteObservation,
 };
 use gnss_attitude::geometry::Paper003Angles;

@@ -358,7 +358,7 @@ pub enum DcmError {
     #[error("a needed baseline or velocity difference is missing")]
     MissingBaseline,
     /// A baseline — an antenna-position difference in body axes, or a measured baseline in the
-    /// reference frame — is shorter than [`crate::attitude::baseline_epoch::MIN_BASELINE_LENGTH`].
+    /// reference frame — is shorter than [`crate::attitude::array::MIN_BASELINE_LENGTH`].
     #[error("baseline of (near) zero length")]
     ZeroLengthBaseline,
     /// A configuration value is out of its domain: a non-positive step or noise level, a pair

@@ -80,13 +80,13 @@ impl<T: Real> DirectionCosineModel<T> {
     ///
     /// # Errors
     /// [`DcmError::NonFinite`]; [`DcmError::ZeroLengthBaseline`] for a baseline shorter than
-    /// [`super::baseline_epoch::MIN_BASELINE_LENGTH`]; [`DcmError::SingularGeometry`] when
+    /// [`super::array::MIN_BASELINE_LENGTH`]; [`DcmError::SingularGeometry`] when
     /// `|n_k| / (|b₁||b₂|) <` [`MIN_NORMAL_RATIO`] for the chosen column.
     pub fn new(b1: &Vector3<T>, b2: &Vector3<T>, choice: ColumnChoice) -> Result<Self, DcmError> {
         if !b1.iter().chain(b2.iter()).all(|v| v.is_finite()) {
             return Err(DcmError::NonFinite);
         }
-        let min_len: T = real(super::baseline_epoch::MIN_BASELINE_LENGTH);
+        let min_len: T = real(super::array::MIN_BASELINE_LENGTH);
         if !(b1.norm() >= min_len) || !(b2.norm() >= min_len) {
             return Err(DcmError::ZeroLengthBaseline);
         }

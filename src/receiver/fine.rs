@@ -15,10 +15,10 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::attitude::array::AntennaArray;
 use crate::attitude::one_stage::OneStageError;
 use crate::attitude::one_stage::{
-    paper003_partials, AntennaArray, EpochReport, LockStatus, OneStageFilter, Prior,
-    SatelliteObservation,
+    paper003_partials, EpochReport, LockStatus, OneStageFilter, Prior, SatelliteObservation,
 };
 use crate::geometry::{vee, Paper003Angles, Quaternion};
 

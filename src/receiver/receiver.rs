@@ -4,7 +4,7 @@ use heapless::{Deque, Vec};
 use nalgebra::{Complex, Matrix3, Vector3};
 
 use crate::attitude::ambiguity::AmbiguityResolver;
-use crate::attitude::baseline_epoch::AntennaArray as BaselineArray;
+use crate::attitude::array::AntennaArray;
 use crate::attitude::one_stage::{LockStatus, SatelliteObservation};
 use crate::attitude::range_model::{BaselineCorrelation, Baselines};
 use crate::attitude::rigid_body::RigidBodyFilter;
@@ -94,7 +94,7 @@ impl AttitudeReceiver {
     pub fn new(config: ReceiverConfig) -> Result<Self, ReceiverError> {
         config.validate()?;
         let antennas = config.antenna_positions();
-        BaselineArray::new(antennas).map_err(ConfigError::from)?;
+        AntennaArray::new(antennas).map_err(ConfigError::from)?;
         let baselines = body_baselines(&antennas);
         let b = Baselines::new(baselines).map_err(ConfigError::from)?;
         let solver = SnapshotSolver::new(b, BaselineCorrelation::shared_base_antenna());

@@ -5,7 +5,7 @@
 use heapless::Vec;
 use nalgebra::{Matrix3, Vector3};
 
-use crate::attitude::baseline_epoch::AntennaArray as BaselineArray;
+use crate::attitude::array::AntennaArray;
 use crate::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
 use crate::ekf::GateConfidence;
 use crate::geometry::Quaternion;
@@ -301,7 +301,7 @@ impl AttitudeReceiver {
                 sigma_velocity: cfg.velocity_sigma_m_s,
                 gate: Some(GateConfidence::P999),
             };
-            let Ok(array) = BaselineArray::new(self.antennas) else {
+            let Ok(array) = AntennaArray::new(self.antennas) else {
                 return;
             };
             let p0 = cov + Matrix3::identity() * 1e-6;

@@ -102,7 +102,6 @@ mod update;
 #[cfg(test)]
 mod tests;
 
-pub use crate::attitude::array::{Antenna, AntennaArray};
 pub use adapter::{
     observation_from_epoch, AdapterConfig, AntennaMapping, EpochClock, NoiseFloor,
     ObservationAdapter, QuadratureSign,

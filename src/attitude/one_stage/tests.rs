@@ -4,6 +4,7 @@
 use nalgebra::{SMatrix, Vector3};
 
 use super::*;
+use crate::attitude::array::AntennaArray;
 use crate::attitude::one_stage::OneStageError;
 use crate::geometry::Paper003Angles;
 

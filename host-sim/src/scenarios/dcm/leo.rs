@@ -1,6 +1,6 @@
 //! The `leo` variant's extra figures: how much the Doppler tells about a slow rotation.
 
-use gnss_attitude::attitude::baseline_epoch::BaselinePair;
+use gnss_attitude::attitude::array::BaselinePair;
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use nalgebra::Matrix3;
 use serde_json::{json, Map, Value};

@@ -2,8 +2,9 @@
 //! into the core filter and measures the error.
 
 use anyhow::anyhow;
+use gnss_attitude::attitude::array::AntennaArray;
 use gnss_attitude::attitude::one_stage::{
-    AntennaArray, EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
+    EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
     SatelliteObservation,
 };
 use gnss_attitude::geometry::Paper003Angles;
