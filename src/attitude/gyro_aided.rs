@@ -205,8 +205,8 @@ impl<T: Real> GyroAidedConfig<T> {
         let q_bb = b2 * tau;
         SMatrix::from_fn(|r, c| match (r, c) {
             (r, c) if r < 3 && c < 3 && r == c => q_tt,
-            (r, c) if r < 3 && c >= 3 && c < 6 && c == r + 3 => q_tb,
-            (r, c) if r >= 3 && r < 6 && c < 3 && r == c + 3 => q_tb,
+            (r, c) if r < 3 && c == r + 3 => q_tb,
+            (r, c) if c < 3 && r == c + 3 => q_tb,
             (r, c) if (3..6).contains(&r) && r == c => q_bb,
             (r, c) if r >= 6 && r == c => beta2 * tau,
             _ => T::zero(),

@@ -147,7 +147,7 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
     // the fine filter: locked samples after convergence
     let fine_samples: Vec<StageSample> = samples
         .iter()
-        .filter(|s| s.fine_locked && s.source == AttitudeSource::OneStage)
+        .filter(|s| s.fine_locked && s.source == AttitudeSource::Fine)
         .map(|s| StageSample {
             t: s.t,
             error: s.fine_error,
@@ -267,7 +267,7 @@ pub fn faults_json(faults: &[FaultOutcome]) -> Value {
 /// error inside 3σ on every axis for at least `hold` seconds; seconds after `from`.
 pub fn attitude_recovery(samples: &[Sample], from: f64, hold: f64) -> Option<f64> {
     let ok = |s: &Sample| {
-        s.source == AttitudeSource::OneStage
+        s.source == AttitudeSource::Fine
             && (0..3).all(|a| s.error[a].abs() <= 3.0 * s.sigma[a].max(1e-9))
     };
     let mut start: Option<f64> = None;
