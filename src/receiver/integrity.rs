@@ -31,6 +31,11 @@ const REJECTED_ALARM: f32 = 0.5;
 /// `dᵀ (P_fine + P_fix)⁻¹ d`.
 const CHI2_3_P999: f32 = 16.27;
 
+/// Consecutive failed checks that raise the alarm: a single failure (the fix's own tail, about
+/// 3 % of the checks in the default flight) degrades the integrity and inflates the
+/// covariance by the check's NEES until the next check; a second in a row restarts.
+const CHECKS_TO_ALARM: u32 = 2;
+
 /// Implausible gyro samples within one window that exclude the gyro.
 const FAULTS_TO_EXCLUDE: u32 = 3;
 
@@ -63,6 +68,10 @@ pub(crate) struct IntegrityMonitor {
     checked: Integrity,
     /// The last check's figures.
     pub last_check: Option<IntegrityCheck>,
+    /// Checks in a row that failed.
+    failed_checks: u32,
+    /// Covariance inflation from the last failed check (1 when it passed).
+    check_inflation: f32,
 }
 
 impl IntegrityMonitor {
@@ -92,11 +101,12 @@ impl IntegrityMonitor {
     /// The factor the reported covariance is inflated by: the residuals' excess over their
     /// covariance when it is significant, else 1.
     pub fn inflation(&self) -> f32 {
-        if self.primed && self.nis > NIS_DEGRADED {
+        let residuals = if self.primed && self.nis > NIS_DEGRADED {
             self.nis
         } else {
             1.0
-        }
+        };
+        residuals.max(self.check_inflation)
     }
 
     /// The verdict: the last independent check, degraded by inconsistent residuals.
@@ -107,12 +117,20 @@ impl IntegrityMonitor {
         }
     }
 
+    /// A monitor whose covariance inflation is 1.
+    pub fn new() -> Self {
+        Self {
+            check_inflation: 1.0,
+            ..Self::default()
+        }
+    }
+
     /// Forgets everything (a cold start).
     pub fn reset(&mut self) {
         *self = Self {
             window_faults: self.window_faults,
             last_check: self.last_check,
-            ..Self::default()
+            ..Self::new()
         };
     }
 }
@@ -232,12 +250,26 @@ impl AttitudeReceiver {
             nees,
             fix_sigma_rad: largest(&fix.covariance),
             fine_sigma_rad: largest(&p_fine),
-            alarm: nees > CHI2_3_P999,
+            alarm: false,
         });
         if nees <= CHI2_3_P999 {
             self.integrity.checked = Integrity::Consistent;
+            self.integrity.failed_checks = 0;
+            self.integrity.check_inflation = 1.0;
             return;
         }
+        self.integrity.failed_checks = self.integrity.failed_checks.saturating_add(1);
+        if self.integrity.failed_checks < CHECKS_TO_ALARM {
+            // doubt: the attitude is reported with the covariance the disagreement implies
+            self.integrity.checked = Integrity::Degraded;
+            self.integrity.check_inflation = nees / 3.0;
+            return;
+        }
+        if let Some(c) = self.integrity.last_check.as_mut() {
+            c.alarm = true;
+        }
+        self.integrity.failed_checks = 0;
+        self.integrity.check_inflation = 1.0;
         self.integrity.checked = Integrity::Alarm;
         self.health.integrity = Integrity::Alarm;
         let angle_mrad = (d.norm() * 1e3).min(f32::from(u16::MAX)) as u16;

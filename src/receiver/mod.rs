@@ -344,7 +344,7 @@ impl AttitudeReceiver {
             rigid: RigidStage::default(),
             gyro,
             monitor: AntennaMonitor::default(),
-            integrity: IntegrityMonitor::default(),
+            integrity: IntegrityMonitor::new(),
             line_bias,
             events: Events::default(),
             health: ReceiverHealth::default(),

@@ -150,6 +150,10 @@ const BIT_GAP: u64 = 3;
 const BIT_LEARNED_WEIGHT: f32 = 8.0;
 const BIT_LEARNED_MARGIN: f32 = 4.0;
 
+/// Weight an anomalous transition adds at its position: a moved edge is learned after
+/// about `BIT_LEARNED_WEIGHT / BIT_RELEARN_WEIGHT` bits.
+const BIT_RELEARN_WEIGHT: f32 = 0.25;
+
 /// Forgetting of the histogram per learned edge (the edges drift against the receiver's
 /// epochs with the Doppler).
 const BIT_FORGET: f32 = 0.97;
@@ -196,6 +200,11 @@ impl BitMonitor {
         };
         let at_edge = (last.saturating_add(1)..=epoch).any(near);
         if learned && !at_edge {
+            // an edge that moved (a re-acquired channel, the code's drift against the epochs)
+            // takes over after a few dozen bits; a single wrong transition does not
+            if gap == 1 {
+                self.histogram[(epoch % period) as usize] += BIT_RELEARN_WEIGHT;
+            }
             return true;
         }
         if gap == 1 {
