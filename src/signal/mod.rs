@@ -10,6 +10,7 @@
 //! Integer arithmetic only in the sample loop; see [`correlator`] for the overflow analysis
 //! and the fixed-point error bound.
 
+pub mod bitwise;
 pub mod block;
 pub mod ca_code;
 pub mod correlator;

@@ -1,0 +1,638 @@
+//! The bit-parallel correlator of one satellite over `A` antennas: one carrier NCO and one
+//! code NCO (the reference antenna's, steered by its loops) shared by every antenna, E/P/L and
+//! noise taps on the reference antenna, the prompt (or all four taps) on the others.
+//!
+//! Same interface and output as [`Correlator`](crate::signal::Correlator): the integration
+//! ends where the prompt code phase completes a code period, whatever the block boundaries;
+//! [`BitCorrelator::run`] stops there and resumes in the next call; the output is an
+//! [`EpochCorrelations`] with the same stamps (first sample, code and carrier phase at it,
+//! sample count, completeness).
+
+use super::block::BitBlock;
+use super::carrier::{self, CarrierLevels, CarrierStep, CarrierWords};
+use super::code::{self, CodeCursor, CodeTable, EXT_WORDS, MIN_TABLE_SAMPLE_RATE_HZ};
+use super::kernel::{self, ChunkPlanes, ReplicaWord, CHUNK_WORDS, MAX_STREAMS};
+use super::planes::{PlaneFormat, WORD_SAMPLES};
+use crate::error::SignalError;
+use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, QUIET_OFFSET_CHIPS};
+use crate::signal::correlator::{
+    CorrelatorConfig, EpochCorrelations, Iq, SlaveTaps, Taps, MAX_EARLY_LATE_OFFSET,
+    MAX_SAMPLES_PER_EPOCH,
+};
+use crate::signal::nco::{CarrierNco, CodeNco, CODE_WRAP};
+
+/// Largest noise-tap delay, samples (the quiet offsets of all PRNs stay below it up to
+/// 60 Msps).
+pub const MAX_NOISE_DELAY_SAMPLES: usize = 1024;
+
+/// Prompt words kept before a chunk for the delayed taps.
+const BACK_WORDS: usize = MAX_NOISE_DELAY_SAMPLES / WORD_SAMPLES;
+/// Prompt words kept after a chunk for the early tap.
+const FORWARD_WORDS: usize = MAX_EARLY_LATE_OFFSET.div_ceil(WORD_SAMPLES);
+/// Prompt words generated per chunk at most.
+const PROMPT_WORDS: usize = CHUNK_WORDS + BACK_WORDS + FORWARD_WORDS + 1;
+
+/// Index of the early tap in the replica words and accumulators.
+const EARLY: usize = 0;
+/// Index of the prompt tap.
+const PROMPT: usize = 1;
+/// Index of the late tap.
+const LATE: usize = 2;
+/// Index of the noise tap.
+const NOISE: usize = 3;
+
+/// Error returned by [`BitCorrelator`] and [`CodeTable::new`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum BitCorrelatorError {
+    /// The correlator configuration is refused by its validation (see
+    /// [`CorrelatorConfig::validate`]).
+    #[error("correlator configuration refused")]
+    Config(#[source] SignalError),
+    /// A value is out of the bit-parallel correlator's range: a sample rate below
+    /// [`MIN_TABLE_SAMPLE_RATE_HZ`] (two samples per chip), a noise delay above
+    /// [`MAX_NOISE_DELAY_SAMPLES`], a carrier frequency beyond ±`f_s`/2, a code rate more than
+    /// 1 % off nominal, or no antennas.
+    #[error("value out of the bit-parallel correlator's range")]
+    InvalidConfig,
+    /// A frequency, rate or phase was NaN or infinite.
+    #[error("non-finite NCO input")]
+    NonFinite,
+    /// The cursor lies beyond the end of the block.
+    #[error("cursor beyond the end of the block")]
+    CursorOutOfRange,
+    /// The block's planes are not of the correlator's format.
+    #[error("block planes of another format")]
+    FormatMismatch,
+    /// The block's code table is of another sample rate.
+    #[error("code table of another sample rate")]
+    TableMismatch,
+}
+
+impl crate::error::Error for BitCorrelatorError {
+    fn kind(&self) -> crate::error::ErrorKind {
+        match self {
+            Self::Config(e) => crate::error::Error::kind(e),
+            Self::NonFinite => crate::error::ErrorKind::NonFinite,
+            _ => crate::error::ErrorKind::InvalidInput,
+        }
+    }
+}
+
+/// Configuration of a bit-parallel correlator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BitCorrelatorConfig {
+    /// Front end and tap placement, as for the `i8` correlator.
+    pub correlator: CorrelatorConfig,
+    /// The planes the blocks will carry.
+    pub format: PlaneFormat,
+    /// Quantization of the carrier replica.
+    pub carrier: CarrierLevels,
+}
+
+impl BitCorrelatorConfig {
+    /// The noise tap's delay, samples: the PRN's quiet offset plus half a chip,
+    /// `round((q + ½)·f_s/f_chip)` (a delay in `[q, q + 1]` chips: the autocorrelation is
+    /// `−1/1023` there).
+    pub fn noise_delay_samples(&self, prn: Prn) -> usize {
+        let quiet = QUIET_OFFSET_CHIPS.get(prn.index()).copied().unwrap_or(6);
+        let d = libm::round(
+            (f64::from(quiet) + 0.5) * self.correlator.sample_rate_hz / CA_CHIP_RATE_HZ,
+        );
+        if d.is_finite() && d >= 1.0 {
+            d as usize
+        } else {
+            1
+        }
+    }
+
+    /// Checks the configuration for `prn`.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::Config`] from [`CorrelatorConfig::validate`];
+    /// [`BitCorrelatorError::InvalidConfig`] for a sample rate below two samples per chip or a
+    /// noise delay beyond [`MAX_NOISE_DELAY_SAMPLES`].
+    pub fn validate(&self, prn: Prn) -> Result<(), BitCorrelatorError> {
+        self.correlator
+            .validate()
+            .map_err(BitCorrelatorError::Config)?;
+        if !(self.correlator.sample_rate_hz >= MIN_TABLE_SAMPLE_RATE_HZ)
+            || self.noise_delay_samples(prn) > MAX_NOISE_DELAY_SAMPLES
+        {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        Ok(())
+    }
+}
+
+/// The bit-parallel correlator of one satellite over `A` antennas.
+#[derive(Clone, Debug)]
+pub struct BitCorrelator<const A: usize> {
+    prn: Prn,
+    sample_rate_hz: f64,
+    format: PlaneFormat,
+    levels: CarrierLevels,
+    carrier: CarrierNco,
+    /// Total carrier phase, 2⁻³² cycle (low 32 bits = `carrier.phase`).
+    carrier_total: i64,
+    code: CodeNco,
+    offset: usize,
+    noise_delay: usize,
+    slave_taps: SlaveTaps,
+    table_step: u64,
+    ext: [u32; EXT_WORDS],
+    /// Population counts per antenna, tap (E, P, L, N) and stream.
+    acc: [[[u32; MAX_STREAMS]; 4]; A],
+    /// Samples of the `c` streams' and of the `s` streams' support.
+    support: [u32; 2],
+    samples: u32,
+    epoch_first_sample: u64,
+    epoch_code_phase: u64,
+    epoch_carrier_phase: i64,
+    partial: bool,
+}
+
+impl<const A: usize> BitCorrelator<A> {
+    /// A correlator for `prn` with the NCOs at zero phase, the configured IF and the nominal
+    /// code rate.
+    ///
+    /// # Errors
+    /// As [`BitCorrelatorConfig::validate`]; [`BitCorrelatorError::InvalidConfig`] for
+    /// `A = 0`.
+    pub fn new(prn: Prn, config: &BitCorrelatorConfig) -> Result<Self, BitCorrelatorError> {
+        config.validate(prn)?;
+        if A == 0 {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        let c = &config.correlator;
+        let step = CodeNco::step_for(CA_CHIP_RATE_HZ, c.sample_rate_hz);
+        code::step_supported(step)?;
+        Ok(Self {
+            prn,
+            sample_rate_hz: c.sample_rate_hz,
+            format: config.format,
+            levels: config.carrier,
+            carrier: CarrierNco {
+                phase: 0,
+                step: CarrierNco::step_for(c.intermediate_frequency_hz, c.sample_rate_hz),
+            },
+            carrier_total: 0,
+            code: CodeNco { phase: 0, step },
+            offset: c.early_late_offset_samples().min(MAX_EARLY_LATE_OFFSET),
+            noise_delay: config.noise_delay_samples(prn),
+            slave_taps: c.slave_taps,
+            table_step: step,
+            ext: code::extended_code(prn),
+            acc: [[[0; MAX_STREAMS]; 4]; A],
+            support: [0; 2],
+            samples: 0,
+            epoch_first_sample: 0,
+            epoch_code_phase: 0,
+            epoch_carrier_phase: 0,
+            partial: true,
+        })
+    }
+
+    /// The satellite.
+    pub fn prn(&self) -> Prn {
+        self.prn
+    }
+
+    /// Sample rate, Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        self.sample_rate_hz
+    }
+
+    /// The planes this correlator reads.
+    pub fn format(&self) -> PlaneFormat {
+        self.format
+    }
+
+    /// The carrier replica's levels.
+    pub fn carrier_levels(&self) -> CarrierLevels {
+        self.levels
+    }
+
+    /// The carrier NCO.
+    pub fn carrier(&self) -> CarrierNco {
+        self.carrier
+    }
+
+    /// The code NCO.
+    pub fn code(&self) -> CodeNco {
+        self.code
+    }
+
+    /// The early/late offset, samples (early = prompt advanced by it, late = delayed).
+    pub fn early_late_offset_samples(&self) -> usize {
+        self.offset
+    }
+
+    /// The noise tap's delay behind the prompt, samples.
+    pub fn noise_delay_samples(&self) -> usize {
+        self.noise_delay
+    }
+
+    /// The code step of the table the blocks must carry (the nominal step), 2⁻³² chip.
+    pub fn table_step(&self) -> u64 {
+        self.table_step
+    }
+
+    /// Total carrier phase of the replica now, 2⁻³² cycle.
+    pub fn carrier_phase_total(&self) -> i64 {
+        self.carrier_total
+    }
+
+    /// Sets the carrier NCO frequency (IF + Doppler), Hz.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`]; [`BitCorrelatorError::InvalidConfig`] for
+    /// `|f| ≥ f_s/2`.
+    pub fn set_carrier_frequency(&mut self, frequency_hz: f64) -> Result<(), BitCorrelatorError> {
+        if !frequency_hz.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        if !(frequency_hz.abs() < 0.5 * self.sample_rate_hz) {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        self.carrier.step = CarrierNco::step_for(frequency_hz, self.sample_rate_hz);
+        Ok(())
+    }
+
+    /// Sets the code rate, chips/s.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`]; [`BitCorrelatorError::InvalidConfig`] for a rate
+    /// more than 1 % off nominal.
+    pub fn set_code_rate(&mut self, chips_per_second: f64) -> Result<(), BitCorrelatorError> {
+        if !chips_per_second.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        if !((chips_per_second / CA_CHIP_RATE_HZ - 1.0).abs() <= 0.01) {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        let step = CodeNco::step_for(chips_per_second, self.sample_rate_hz);
+        code::step_supported(step)?;
+        if CODE_WRAP.div_ceil(step) + 1 > MAX_SAMPLES_PER_EPOCH {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        self.code.step = step;
+        Ok(())
+    }
+
+    /// Sets the prompt code phase, chips (modulo 1023), discarding the integration in
+    /// progress (the next output is marked partial).
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`].
+    pub fn set_code_phase(&mut self, chips: f64) -> Result<(), BitCorrelatorError> {
+        if !chips.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        self.code.phase = CodeNco::phase_for(chips);
+        self.reset_integration();
+        Ok(())
+    }
+
+    /// Sets the carrier NCO phase, cycles, keeping the whole-cycle count.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`].
+    pub fn set_carrier_phase(&mut self, cycles: f64) -> Result<(), BitCorrelatorError> {
+        if !cycles.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        let frac = cycles - libm::floor(cycles);
+        let word = (libm::round(frac * 4_294_967_296.0) as u64 & 0xffff_ffff) as u32;
+        self.carrier_total = (self.carrier_total & !0xffff_ffff) | i64::from(word);
+        self.carrier.phase = word;
+        Ok(())
+    }
+
+    /// Discards the integration in progress; the next output is marked partial.
+    pub fn reset_integration(&mut self) {
+        self.acc = [[[0; MAX_STREAMS]; 4]; A];
+        self.support = [0; 2];
+        self.samples = 0;
+        self.partial = true;
+    }
+
+    /// Correlates `block` from sample `*cursor` until the end of the block or the end of the
+    /// current code period, whichever comes first, and advances `*cursor`. Returns the
+    /// correlations when a code period completed, `None` when the block ended first (the
+    /// integration continues in the next call, which must pass the next block of the same
+    /// sample stream).
+    ///
+    /// Bounded: at most one code period of samples per call.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::CursorOutOfRange`] when `*cursor > block.len()`,
+    /// [`BitCorrelatorError::FormatMismatch`] or [`BitCorrelatorError::TableMismatch`] for a
+    /// block that does not fit this correlator; the correlator is then unchanged.
+    pub fn run(
+        &mut self,
+        block: &BitBlock<'_, A>,
+        cursor: &mut usize,
+    ) -> Result<Option<EpochCorrelations<A>>, BitCorrelatorError> {
+        let start = *cursor;
+        if start > block.len() {
+            return Err(BitCorrelatorError::CursorOutOfRange);
+        }
+        if block.format() != self.format {
+            return Err(BitCorrelatorError::FormatMismatch);
+        }
+        if block.table().step() != self.table_step {
+            return Err(BitCorrelatorError::TableMismatch);
+        }
+        let available = (block.len() - start) as u64;
+        let to_wrap = self.code.samples_to_wrap();
+        let n = available.min(to_wrap) as usize;
+        if n == 0 {
+            return Ok(None);
+        }
+        if self.samples == 0 {
+            self.epoch_first_sample = block.first_sample().wrapping_add(start as u64);
+            self.epoch_code_phase = self.code.phase;
+            self.epoch_carrier_phase = self.carrier_total;
+        }
+        self.correlate_span(block, start, n);
+        *cursor = start + n;
+        if (n as u64) < to_wrap {
+            return Ok(None);
+        }
+        self.code.phase = self.code.phase.wrapping_sub(CODE_WRAP);
+        let out = EpochCorrelations {
+            taps: self.taps(),
+            samples: self.samples,
+            first_sample: self.epoch_first_sample,
+            code_phase_at_first: self.epoch_code_phase,
+            carrier_phase_at_first: self.epoch_carrier_phase,
+            complete: !self.partial,
+        };
+        self.acc = [[[0; MAX_STREAMS]; 4]; A];
+        self.support = [0; 2];
+        self.samples = 0;
+        self.partial = false;
+        Ok(Some(out))
+    }
+
+    /// The taps of the integration so far.
+    fn taps(&self) -> [Taps; A] {
+        let (cx, tb) = (self.format.complex, self.format.two_bit());
+        let l3 = self.levels == CarrierLevels::Three;
+        let [nc, ns] = self.support;
+        let mut out = [Taps::default(); A];
+        for (a, (t, acc)) in out.iter_mut().zip(self.acc.iter()).enumerate() {
+            let tap = |k: usize| {
+                let p = acc.get(k).copied().unwrap_or_default();
+                let (i, q) = kernel::combine(cx, tb, l3, &p, nc, ns);
+                Iq { i, q }
+            };
+            t.prompt = tap(PROMPT);
+            if a == 0 || self.slave_taps == SlaveTaps::All {
+                t.early = tap(EARLY);
+                t.late = tap(LATE);
+                t.noise = tap(NOISE);
+            }
+        }
+        out
+    }
+
+    /// Correlates `n` samples from `start` (all within one code period), chunk by chunk.
+    fn correlate_span(&mut self, block: &BitBlock<'_, A>, start: usize, n: usize) {
+        let end = start + n;
+        let mut s = start;
+        // Bounded: every pass ends at least one word further (at most 2 049 passes for the
+        // largest epoch).
+        while s < end {
+            let w0 = s / WORD_SAMPLES;
+            let w1 = ((end - 1) / WORD_SAMPLES + 1).min(w0 + CHUNK_WORDS);
+            let stop = end.min(w1 * WORD_SAMPLES);
+            self.chunk(block, w0, w1, s, stop);
+            let m = (stop - s) as u64;
+            self.code.phase += m * self.code.step;
+            self.carrier.phase = self
+                .carrier
+                .phase
+                .wrapping_add(self.carrier.step.wrapping_mul(m as u32));
+            let advance = i64::from(self.carrier.step as i32) * m as i64;
+            self.carrier_total = self.carrier_total.wrapping_add(advance);
+            self.samples = self.samples.saturating_add(m as u32);
+            s = stop;
+        }
+    }
+
+    /// One chunk: the words `w0..w1` of the block, samples `s..stop` of them.
+    fn chunk(&mut self, block: &BitBlock<'_, A>, w0: usize, w1: usize, s: usize, stop: usize) {
+        let nw = (w1 - w0).min(CHUNK_WORDS);
+        let mut replica = [ReplicaWord::default(); CHUNK_WORDS];
+        let Some(replica) = replica.get_mut(..nw) else {
+            return;
+        };
+        let lead = s - w0 * WORD_SAMPLES;
+        let tail = w1 * WORD_SAMPLES - stop;
+        self.fill_carrier(replica, lead, tail);
+        self.fill_code(block.table(), replica, lead);
+        let first_partial = lead > 0 || (nw == 1 && tail > 0);
+        let last_partial = tail > 0;
+        let edges = Edges {
+            first: first_partial,
+            last: last_partial,
+        };
+        let (cx, tb) = (self.format.complex, self.format.two_bit());
+        let l3 = self.levels == CarrierLevels::Three;
+        if l3 {
+            for r in replica.iter() {
+                self.support[0] += kernel::popcount(r.carrier.nzc);
+                self.support[1] += kernel::popcount(r.carrier.nzs);
+            }
+        } else {
+            let m = (stop - s) as u32;
+            self.support[0] += m;
+            self.support[1] += m;
+        }
+        for (a, acc) in self.acc.iter_mut().enumerate() {
+            let Some(planes) = block.planes(a) else {
+                continue;
+            };
+            let Some(p) = chunk_planes(planes, w0, w1, self.format) else {
+                continue;
+            };
+            let all = a == 0 || self.slave_taps == SlaveTaps::All;
+            match (cx, tb, l3) {
+                (true, false, false) => antenna::<true, false, false>(p, replica, all, edges, acc),
+                (true, true, false) => antenna::<true, true, false>(p, replica, all, edges, acc),
+                (true, false, true) => antenna::<true, false, true>(p, replica, all, edges, acc),
+                (true, true, true) => antenna::<true, true, true>(p, replica, all, edges, acc),
+                (false, false, false) => {
+                    antenna::<false, false, false>(p, replica, all, edges, acc);
+                }
+                (false, true, false) => antenna::<false, true, false>(p, replica, all, edges, acc),
+                (false, false, true) => antenna::<false, false, true>(p, replica, all, edges, acc),
+                (false, true, true) => antenna::<false, true, true>(p, replica, all, edges, acc),
+            }
+        }
+    }
+
+    /// The carrier words of the chunk, with the span's edges masked out (`lead` samples before
+    /// the span in the first word, `tail` after it in the last).
+    fn fill_carrier(&self, replica: &mut [ReplicaWord], lead: usize, tail: usize) {
+        let mut words = [CarrierWords::default(); CHUNK_WORDS];
+        let words = words.get_mut(..replica.len()).unwrap_or_default();
+        let phase = self
+            .carrier
+            .phase
+            .wrapping_sub(self.carrier.step.wrapping_mul(lead as u32));
+        let step = CarrierStep::new(self.carrier.step);
+        match self.levels {
+            CarrierLevels::Two => carrier::two_level(words, phase, &step),
+            CarrierLevels::Three => carrier::three_level(words, phase, &step),
+        };
+        if let Some(first) = words.first_mut() {
+            let mask = u32::MAX << (lead & 31);
+            first.nzc &= mask;
+            first.nzs &= mask;
+        }
+        if let Some(last) = words.last_mut() {
+            let mask = u32::MAX >> (tail & 31);
+            last.nzc &= mask;
+            last.nzs &= mask;
+        }
+        for (r, w) in replica.iter_mut().zip(words.iter()) {
+            r.carrier = *w;
+        }
+    }
+
+    /// The code words of the chunk's four taps: the prompt string from
+    /// [`BACK_WORDS`]-bounded margins, the taps as shifted windows of it.
+    fn fill_code(&self, table: &CodeTable, replica: &mut [ReplicaWord], lead: usize) {
+        let d = self.offset;
+        let back = self.noise_delay.max(d).div_ceil(WORD_SAMPLES);
+        let forward = d.div_ceil(WORD_SAMPLES);
+        let words = (replica.len() + back + forward + 1).min(PROMPT_WORDS);
+        let step = self.code.step;
+        // Code phase at the first sample of the first prompt word.
+        let behind = ((lead + back * WORD_SAMPLES) as u64 * step) % CODE_WRAP;
+        let first = (self.code.phase % CODE_WRAP + CODE_WRAP - behind) % CODE_WRAP;
+        let mut at = CodeCursor::from_phase(first);
+        let word_step = WORD_SAMPLES as u64 * step;
+        let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
+        let step4 = (step >> 2) as u32;
+        let mut prompt = [0u32; PROMPT_WORDS];
+        for p in prompt.iter_mut().take(words) {
+            *p = code::prompt_word(&self.ext, table, at, step4);
+            at.advance(chips, frac);
+        }
+        let base = back * WORD_SAMPLES;
+        fill_tap(replica, &prompt, base + d, EARLY);
+        fill_tap(replica, &prompt, base, PROMPT);
+        fill_tap(replica, &prompt, base - d, LATE);
+        fill_tap(replica, &prompt, base - self.noise_delay, NOISE);
+    }
+}
+
+/// Tap `tap` of every replica word: 32 bits of the prompt string from bit `offset + 32·i`.
+fn fill_tap(replica: &mut [ReplicaWord], prompt: &[u32], offset: usize, tap: usize) {
+    let sh = (offset % WORD_SAMPLES) as u32;
+    let src = prompt.get(offset / WORD_SAMPLES..).unwrap_or_default();
+    for (r, pair) in replica.iter_mut().zip(src.windows(2)) {
+        if let (Some(t), &[lo, hi]) = (r.taps.get_mut(tap), pair) {
+            *t = (lo >> sh) | ((hi << 1) << (31 - sh));
+        }
+    }
+}
+
+/// Which words of a chunk are partial (the span starts or ends inside them).
+#[derive(Clone, Copy, Debug)]
+struct Edges {
+    first: bool,
+    last: bool,
+}
+
+/// The chunk's words of an antenna's planes (absent planes replaced by the sign plane).
+fn chunk_planes<'a>(
+    p: &super::planes::AntennaPlanes<'a>,
+    w0: usize,
+    w1: usize,
+    format: PlaneFormat,
+) -> Option<ChunkPlanes<'a>> {
+    let a = p.sign_i().get(w0..w1)?;
+    let two = format.two_bit();
+    let ma = if two { p.mag_i().get(w0..w1)? } else { a };
+    let b = if format.complex {
+        p.sign_q().get(w0..w1)?
+    } else {
+        a
+    };
+    let mb = if two && format.complex {
+        p.mag_q().get(w0..w1)?
+    } else {
+        a
+    };
+    Some(ChunkPlanes { a, ma, b, mb })
+}
+
+/// One antenna over one chunk: the taps it computes, partial words with the span mask.
+#[inline(never)]
+fn antenna<const CX: bool, const TB: bool, const L3: bool>(
+    p: ChunkPlanes<'_>,
+    replica: &[ReplicaWord],
+    all_taps: bool,
+    edges: Edges,
+    acc: &mut [[u32; MAX_STREAMS]; 4],
+) {
+    if L3 {
+        // The 3-level carrier masks every word anyway; the span's edges are in the masks.
+        taps::<CX, TB, L3, true>(p, replica, all_taps, acc);
+        return;
+    }
+    let nw = replica.len();
+    let lo = usize::from(edges.first);
+    let hi = if edges.last && nw > lo { nw - 1 } else { nw };
+    if edges.first {
+        taps::<CX, TB, L3, true>(
+            window(p, 0, 1),
+            replica.get(..1).unwrap_or_default(),
+            all_taps,
+            acc,
+        );
+    }
+    if hi > lo {
+        let r = replica.get(lo..hi).unwrap_or_default();
+        taps::<CX, TB, L3, false>(window(p, lo, hi), r, all_taps, acc);
+    }
+    if hi < nw && nw > lo {
+        let r = replica.get(hi..nw).unwrap_or_default();
+        taps::<CX, TB, L3, true>(window(p, hi, nw), r, all_taps, acc);
+    }
+}
+
+/// Words `lo..hi` of chunk planes.
+fn window<'a>(p: ChunkPlanes<'a>, lo: usize, hi: usize) -> ChunkPlanes<'a> {
+    let cut = |s: &'a [u32]| s.get(lo..hi).unwrap_or_default();
+    ChunkPlanes {
+        a: cut(p.a),
+        ma: cut(p.ma),
+        b: cut(p.b),
+        mb: cut(p.mb),
+    }
+}
+
+/// The kernel passes of one antenna: E and P, then L and N (reference antenna, or every
+/// antenna with [`SlaveTaps::All`]), or P alone.
+#[inline(always)]
+fn taps<const CX: bool, const TB: bool, const L3: bool, const MASKED: bool>(
+    p: ChunkPlanes<'_>,
+    replica: &[ReplicaWord],
+    all_taps: bool,
+    acc: &mut [[u32; MAX_STREAMS]; 4],
+) {
+    if all_taps {
+        kernel::accumulate::<CX, TB, L3, 2, MASKED>(p, replica, [EARLY, PROMPT], acc);
+        kernel::accumulate::<CX, TB, L3, 2, MASKED>(p, replica, [LATE, NOISE], acc);
+    } else {
+        kernel::accumulate::<CX, TB, L3, 1, MASKED>(p, replica, [PROMPT], acc);
+    }
+}
