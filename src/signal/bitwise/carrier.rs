@@ -13,23 +13,27 @@
 //!   another quarter `s = 0`.
 //!
 //! Bit planes: `C` (bit set: `c < 0`), `S` (`s < 0`), and for the 3-level replica the non-zero
-//! masks `NZc`, `NZs`. All of them are most-significant bits of the phase ramp with a fixed
-//! offset: `S₂ = msb(φ)`, `C₂ = msb(φ + ¼)`; `S₃ = msb(φ − 1/16)`, `C₃ = msb(φ + 3/16)`,
-//! `Zs = S₃ ⊕ msb(φ + 1/16)`, `Zc = C₃ ⊕ msb(φ + 5/16)`.
+//! masks `NZc`, `NZs`. They are functions of a small phase index: the quadrant `Q = φ ≫ 30`
+//! (2-level: `S = q₁`, `C = q₁ ⊕ q₀`) or the octant `O` of `φ + 1/16` (3-level: octant `o`
+//! holds sectors `2o − 1` and `2o`, so `NZc = ¬o₁ ∨ o₀`, `NZs = o₁ ∨ o₀`, `C = o₂ ⊕ (o₁ ∧ o₀)`,
+//! `S = o₂`).
 //!
 //! # How a word is made
 //! The step is split `δ = m·2³⁰ + δ_s` with `m ∈ 0..4` and `|δ_s| ≤ 2²⁹` (an eighth of a cycle
-//! per sample). Adding `k·m` quarter cycles to the phase adds exactly `k·m mod 4` to its
-//! quadrant (the low 30 bits are untouched), so the quadrant planes of the *slow* ramp
-//! `ψ_k = φ₀ + k·δ_s` plus the constant pattern `k·m mod 4` (a bit-sliced 2-bit add: four
-//! operations) give the planes of `φ`. The most significant bit of the slow ramp toggles at
-//! most twice a word when `|δ_s| ≤ 2²⁷` (a word spans at most one cycle: Doppler up to
-//! `f_s/32` away from a multiple of `f_s/4`, i.e. ±81 kHz at 2.6 Msps), at most eight times
-//! otherwise: the first toggle is `k₁ = ⌈(2³¹ − (ψ₀ mod 2³¹))/δ_s⌉` (one division), the next
-//! `k₁ + h` or `k₁ + h + 1` with `h = ⌊2³¹/δ_s⌋` (decided exactly by the remainder), and the
-//! plane is the start bit XOR the masks `bits ≥ k` of the toggles. A negative slow step
-//! runs the same computation backwards from the word's last sample and reverses the bits.
-//! Exact: equal to the per-sample evaluation bit for bit (tests check it).
+//! per sample). Adding `k·m` quarter cycles to the phase adds exactly `k·m mod 4` quarters to
+//! its index (the lower bits are untouched), so the index planes of the *slow* ramp
+//! `ψ_k = φ₀ + k·δ_s`, plus the constant pattern `k·m mod 4` in the quarter bits (a
+//! bit-sliced 2-bit add: four operations), give the planes of `φ`. The slow ramp's index
+//! changes by one at each crossing of an index boundary; in a word there are at most
+//! `T = 1 + ⌊30/h⌋` of them, `h = ⌊U/|δ_s|⌋`, `U` the index unit (2³⁰ or 2²⁹): one for a
+//! Doppler below `f_s/128` from a multiple of `f_s/4` (±20 kHz at 2.6 Msps, 2-level), two below
+//! `f_s/64`. The first crossing is `k₁ = ⌈(U − (ψ₀ mod U))/δ_s⌉` (one division), each next one
+//! `h` or `h + 1` later (decided exactly by the remainder), and the index planes are the start
+//! index's bits XOR the masks `bits ≥ k_j` of the crossings that flip them. A negative slow
+//! step runs the same computation backwards from the word's last sample and reverses the bits.
+//! `T` is a compile-time constant per span (1, 2, 4, 8 or 32), so the word loop has no
+//! data-dependent branch. Exact: equal to the per-sample evaluation bit for bit (tests check
+//! it).
 
 /// Quantization levels of the carrier replica.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -58,12 +62,6 @@ pub(crate) struct CarrierWords {
     pub(crate) nzs: u32,
 }
 
-/// Largest slow step of the two-toggle path (a word spans at most one cycle).
-const FAST_SLOW_STEP: u32 = 1 << 27;
-
-/// Half a cycle, 2⁻³² cycle.
-const HALF: u32 = 1 << 31;
-
 /// The carrier step prepared for word generation.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct CarrierStep {
@@ -71,10 +69,6 @@ pub(crate) struct CarrierStep {
     slow: i32,
     /// `|δ_s|`.
     mag: u32,
-    /// `⌊2³¹/|δ_s|⌋` (0 for a zero slow step).
-    h: u32,
-    /// `2³¹ − h·|δ_s|`.
-    rem: u32,
     /// Pattern `k·m mod 4`, low bit plane.
     p0: u32,
     /// Pattern `k·m mod 4`, high bit plane.
@@ -86,11 +80,6 @@ impl CarrierStep {
     pub(crate) fn new(step: u32) -> Self {
         let m = (step.wrapping_add(1 << 29) >> 30) & 3;
         let slow = step.wrapping_sub(m << 30) as i32;
-        let mag = slow.unsigned_abs();
-        let (h, rem) = match HALF.checked_div(mag) {
-            Some(h) => (h, HALF - h * mag),
-            None => (0, 0),
-        };
         let (p0, p1) = match m {
             1 => (0xaaaa_aaaa, 0xcccc_cccc),
             2 => (0, 0xaaaa_aaaa),
@@ -99,22 +88,44 @@ impl CarrierStep {
         };
         Self {
             slow,
-            mag,
-            h,
-            rem,
+            mag: slow.unsigned_abs(),
             p0,
             p1,
         }
     }
 
-    /// Whether the two-toggle path applies.
-    pub(crate) fn fast(&self) -> bool {
-        self.mag <= FAST_SLOW_STEP
-    }
-
     /// The slow ramp's advance over one word.
     fn word_advance(&self) -> u32 {
         (self.slow as u32).wrapping_mul(32)
+    }
+}
+
+/// The crossings of index boundaries (every `2^(32 − B)`) by an increasing ramp.
+#[derive(Clone, Copy, Debug)]
+struct Crossings {
+    /// `|δ_s|`, at least 1.
+    d: u32,
+    /// `⌊U/d⌋`, at most 64.
+    h: u32,
+    /// `U − ⌊U/d⌋·d`.
+    rem: u32,
+}
+
+impl Crossings {
+    fn new(d: u32, bits: u32) -> Self {
+        let unit = 1u32 << (32 - bits);
+        let d = d.max(1);
+        let h = unit / d;
+        Self {
+            d,
+            h: h.min(64),
+            rem: unit - h * d,
+        }
+    }
+
+    /// Crossings in positions 1–31 of a word at most (`1 + ⌊30/h⌋`).
+    fn per_word(&self) -> u32 {
+        1 + 30 / self.h.max(1)
     }
 }
 
@@ -128,147 +139,121 @@ fn above(k: u32) -> u32 {
     }
 }
 
-/// The start bit of the ramp at `psi`, all ones when the most significant bit is set.
+/// All ones when bit `b` of `x` is set.
 #[inline(always)]
-fn start(psi: u32) -> u32 {
-    ((psi as i32) >> 31) as u32
+fn spread(x: u32, b: u32) -> u32 {
+    0u32.wrapping_sub((x >> b) & 1)
 }
 
-/// Most significant bits of `psi + k·d`, `k = 0..31`, for `0 < d ≤ 2²⁷` (at most two toggles).
+/// Planes of the top `B` bits (the index) of `psi + k·d`, `k = 0..31`, for an increasing ramp
+/// (`c.d > 0`), with at most `T` crossings in the word (the caller's bound).
 #[inline(always)]
-fn msb_up_fast(psi: u32, st: &CarrierStep) -> u32 {
-    let d = st.mag;
-    let r = psi & (HALF - 1);
-    let k1 = ((HALF - 1 - r) / d.max(1)).saturating_add(1).min(32);
-    // Position past the boundary at the first toggle, in [0, d) when k1 < 32.
-    let e1 = r.wrapping_add(k1.wrapping_mul(d)).wrapping_sub(HALF);
-    let k2 = k1 + st.h.min(32) + u32::from(e1 < st.rem);
-    start(psi) ^ above(k1) ^ above(k2)
-}
-
-/// Most significant bits of `psi + k·d`, `k = 0..31`, for `0 < d ≤ 2²⁹` (at most eight
-/// toggles, a bounded loop).
-#[inline(always)]
-fn msb_up_general(psi: u32, st: &CarrierStep) -> u32 {
-    let d = st.mag;
-    let r = psi & (HALF - 1);
-    let mut k = ((HALF - 1 - r) / d.max(1)).saturating_add(1).min(32);
-    let mut e = r.wrapping_add(k.wrapping_mul(d)).wrapping_sub(HALF);
-    let mut mask = 0u32;
-    // Bounded: toggles are at least 4 samples apart (d ≤ 2²⁹), so at most 8 fall in 1..31.
-    for _ in 0..8 {
-        if k >= 32 {
-            break;
+fn index_up<const B: u32, const T: usize>(psi: u32, c: &Crossings) -> [u32; 3] {
+    let unit = 1u32 << (32 - B);
+    let start = psi >> (32 - B);
+    let r = psi & (unit - 1);
+    let mut k = ((unit - 1 - r) / c.d).saturating_add(1).min(32);
+    // Position past the boundary at the crossing, in [0, d) while k < 32.
+    let mut e = r.wrapping_add(k.wrapping_mul(c.d)).wrapping_sub(unit);
+    let mut planes = [spread(start, 0), spread(start, 1), spread(start, 2)];
+    for j in 0..T as u32 {
+        let mask = above(k);
+        // The index goes from start + j to start + j + 1: the bits that change flip.
+        let x = start.wrapping_add(j);
+        let flips = x ^ x.wrapping_add(1);
+        planes[0] ^= mask;
+        planes[1] ^= mask & spread(flips, 1);
+        if B > 2 {
+            planes[2] ^= mask & spread(flips, 2);
         }
-        mask ^= above(k);
-        let gap = st.h + u32::from(e < st.rem);
-        e = e.wrapping_add(gap.wrapping_mul(d)).wrapping_sub(HALF);
-        k += gap;
+        let bump = u32::from(e < c.rem);
+        e = e.wrapping_sub(c.rem).wrapping_add(bump.wrapping_mul(c.d));
+        k = k + c.h + bump;
     }
-    start(psi) ^ mask
+    planes
 }
 
-/// Most significant bits of `psi + k·δ_s`, `k = 0..31`.
+/// Planes of the index of `psi + k·δ_s`, `k = 0..31`.
 #[inline(always)]
-fn msb_plane<const FAST: bool>(psi: u32, st: &CarrierStep) -> u32 {
-    let up = |p: u32| {
-        if FAST {
-            msb_up_fast(p, st)
-        } else {
-            msb_up_general(p, st)
-        }
-    };
+fn index_planes<const B: u32, const T: usize>(
+    psi: u32,
+    st: &CarrierStep,
+    c: &Crossings,
+) -> [u32; 3] {
     if st.slow > 0 {
-        up(psi)
+        index_up::<B, T>(psi, c)
     } else if st.slow < 0 {
         // Backwards from the last sample: psi + 31·δ_s + j·|δ_s| is sample 31 − j.
-        up(psi.wrapping_add((st.slow as u32).wrapping_mul(31))).reverse_bits()
+        let start = psi.wrapping_add((st.slow as u32).wrapping_mul(31));
+        index_up::<B, T>(start, c).map(u32::reverse_bits)
     } else {
-        start(psi)
+        let i = psi >> (32 - B);
+        [spread(i, 0), spread(i, 1), spread(i, 2)]
     }
 }
 
-/// Quadrant planes `(q1, q0)` of `φ_k = psi + k·δ` from the most significant bits of the slow
-/// ramp at `psi` (`a`) and at `psi + ¼` (`b`): `q1 = a`, `q0 = a ⊕ b`, plus `k·m mod 4`.
+/// Adds the pattern `k·m mod 4` to the quarter bits `(hi, lo)` of an index (bit-sliced).
 #[inline(always)]
-fn rotate(a: u32, b: u32, st: &CarrierStep) -> (u32, u32) {
-    let q0 = a ^ b;
-    let q1 = a ^ st.p1 ^ (q0 & st.p0);
-    (q1, q0 ^ st.p0)
+fn rotate(hi: u32, lo: u32, st: &CarrierStep) -> (u32, u32) {
+    (hi ^ st.p1 ^ (lo & st.p0), lo ^ st.p0)
 }
 
-/// Fills `out` with the 2-level carrier words of consecutive words, the first starting at
-/// phase `phase`; returns the phase after them. Masks are all ones.
-pub(crate) fn two_level(out: &mut [CarrierWords], phase: u32, st: &CarrierStep) -> u32 {
-    if st.fast() {
-        two_level_with::<true>(out, phase, st)
-    } else {
-        two_level_with::<false>(out, phase, st)
+/// Fills `out` with the carrier words of consecutive words, the first starting at phase
+/// `phase`. 2-level masks are all ones.
+pub(crate) fn fill(out: &mut [CarrierWords], levels: CarrierLevels, phase: u32, st: &CarrierStep) {
+    match levels {
+        CarrierLevels::Two => fill_levels::<false>(out, phase, st),
+        CarrierLevels::Three => fill_levels::<true>(out, phase, st),
     }
 }
 
 #[inline(always)]
-fn two_level_with<const FAST: bool>(
+fn fill_levels<const L3: bool>(out: &mut [CarrierWords], phase: u32, st: &CarrierStep) {
+    let bits = if L3 { 3 } else { 2 };
+    let c = Crossings::new(st.mag, bits);
+    match c.per_word() {
+        0..=1 => fill_with::<L3, 1>(out, phase, st, &c),
+        2 => fill_with::<L3, 2>(out, phase, st, &c),
+        3..=4 => fill_with::<L3, 4>(out, phase, st, &c),
+        5..=8 => fill_with::<L3, 8>(out, phase, st, &c),
+        _ => fill_with::<L3, 32>(out, phase, st, &c),
+    }
+}
+
+#[inline(always)]
+fn fill_with<const L3: bool, const T: usize>(
     out: &mut [CarrierWords],
-    mut psi: u32,
+    phase: u32,
     st: &CarrierStep,
-) -> u32 {
+    c: &Crossings,
+) {
     let adv = st.word_advance();
+    let mut psi = phase;
     for w in out.iter_mut() {
-        let a = msb_plane::<FAST>(psi, st);
-        let b = msb_plane::<FAST>(psi.wrapping_add(1 << 30), st);
-        let (q1, q0) = rotate(a, b, st);
-        *w = CarrierWords {
-            c: q1 ^ q0,
-            s: q1,
-            d: q0,
-            nzc: u32::MAX,
-            nzs: u32::MAX,
+        *w = if L3 {
+            // Octant of φ + 1/16.
+            let [o0, o1, o2] = index_planes::<3, T>(psi.wrapping_add(1 << 28), st, c);
+            let (o2, o1) = rotate(o2, o1, st);
+            CarrierWords {
+                c: o2 ^ (o1 & o0),
+                s: o2,
+                d: 0,
+                nzc: !o1 | o0,
+                nzs: o1 | o0,
+            }
+        } else {
+            let [q0, q1, _] = index_planes::<2, T>(psi, st, c);
+            let (q1, q0) = rotate(q1, q0, st);
+            CarrierWords {
+                c: q1 ^ q0,
+                s: q1,
+                d: q0,
+                nzc: u32::MAX,
+                nzs: u32::MAX,
+            }
         };
         psi = psi.wrapping_add(adv);
     }
-    psi
-}
-
-/// Fills `out` with the 3-level carrier words (see the module documentation); returns the
-/// phase after them.
-pub(crate) fn three_level(out: &mut [CarrierWords], phase: u32, st: &CarrierStep) -> u32 {
-    if st.fast() {
-        three_level_with::<true>(out, phase, st)
-    } else {
-        three_level_with::<false>(out, phase, st)
-    }
-}
-
-#[inline(always)]
-fn three_level_with<const FAST: bool>(
-    out: &mut [CarrierWords],
-    mut psi: u32,
-    st: &CarrierStep,
-) -> u32 {
-    const SIXTEENTH: u32 = 1 << 28;
-    let adv = st.word_advance();
-    for w in out.iter_mut() {
-        // msb(φ − 1/16) and msb(φ + 3/16): the quadrant of φ − 1/16.
-        let a = msb_plane::<FAST>(psi.wrapping_sub(SIXTEENTH), st);
-        let b = msb_plane::<FAST>(psi.wrapping_add(3 * SIXTEENTH), st);
-        // msb(φ + 1/16) and msb(φ + 5/16): the quadrant of φ + 1/16.
-        let e = msb_plane::<FAST>(psi.wrapping_add(SIXTEENTH), st);
-        let f = msb_plane::<FAST>(psi.wrapping_add(5 * SIXTEENTH), st);
-        let (q1, q0) = rotate(a, b, st);
-        let (r1, r0) = rotate(e, f, st);
-        let s = q1;
-        let c = q1 ^ q0;
-        *w = CarrierWords {
-            c,
-            s,
-            d: c ^ s,
-            nzc: !(c ^ r1 ^ r0),
-            nzs: !(s ^ r1),
-        };
-        psi = psi.wrapping_add(adv);
-    }
-    psi
 }
 
 /// The 2-level replica of phase `phase`: `(c, s)`, each ±1 (per-sample definition).
@@ -298,13 +283,8 @@ mod tests {
         let st = CarrierStep::new(step);
         let mut two = [CarrierWords::default(); 8];
         let mut three = [CarrierWords::default(); 8];
-        let end2 = two_level(&mut two[..words], phase, &st);
-        let end3 = three_level(&mut three[..words], phase, &st);
-        assert_eq!(
-            end2,
-            phase.wrapping_add(step.wrapping_mul(32 * words as u32))
-        );
-        assert_eq!(end3, end2);
+        fill(&mut two[..words], CarrierLevels::Two, phase, &st);
+        fill(&mut three[..words], CarrierLevels::Three, phase, &st);
         for w in 0..words {
             for k in 0..32 {
                 let ph = phase.wrapping_add(step.wrapping_mul((32 * w + k) as u32));

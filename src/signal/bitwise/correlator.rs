@@ -11,7 +11,7 @@
 use super::block::BitBlock;
 use super::carrier::{self, CarrierLevels, CarrierStep, CarrierWords};
 use super::code::{self, CodeCursor, CodeTable, EXT_WORDS, MIN_TABLE_SAMPLE_RATE_HZ};
-use super::kernel::{self, ChunkPlanes, ReplicaWord, CHUNK_WORDS, MAX_STREAMS};
+use super::kernel::{self, ChunkPlanes, StreamWords, CHUNK_WORDS, MAX_STREAMS};
 use super::planes::{PlaneFormat, WORD_SAMPLES};
 use crate::error::SignalError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, QUIET_OFFSET_CHIPS};
@@ -147,6 +147,8 @@ pub struct BitCorrelator<const A: usize> {
     acc: [[[u32; MAX_STREAMS]; 4]; A],
     /// Samples of the `c` streams' and of the `s` streams' support.
     support: [u32; 2],
+    /// Scratch of the chunk loop (replica and stream words), reused chunk by chunk.
+    work: Workspace,
     samples: u32,
     epoch_first_sample: u64,
     epoch_code_phase: u64,
@@ -187,6 +189,7 @@ impl<const A: usize> BitCorrelator<A> {
             ext: code::extended_code(prn),
             acc: [[[0; MAX_STREAMS]; 4]; A],
             support: [0; 2],
+            work: Workspace::new(),
             samples: 0,
             epoch_first_sample: 0,
             epoch_code_phase: 0,
@@ -427,69 +430,57 @@ impl<const A: usize> BitCorrelator<A> {
     /// One chunk: the words `w0..w1` of the block, samples `s..stop` of them.
     fn chunk(&mut self, block: &BitBlock<'_, A>, w0: usize, w1: usize, s: usize, stop: usize) {
         let nw = (w1 - w0).min(CHUNK_WORDS);
-        let mut replica = [ReplicaWord::default(); CHUNK_WORDS];
-        let Some(replica) = replica.get_mut(..nw) else {
-            return;
-        };
         let lead = s - w0 * WORD_SAMPLES;
         let tail = w1 * WORD_SAMPLES - stop;
-        self.fill_carrier(replica, lead, tail);
-        self.fill_code(block.table(), replica, lead);
-        let first_partial = lead > 0 || (nw == 1 && tail > 0);
-        let last_partial = tail > 0;
-        let edges = Edges {
-            first: first_partial,
-            last: last_partial,
-        };
-        let (cx, tb) = (self.format.complex, self.format.two_bit());
         let l3 = self.levels == CarrierLevels::Three;
+        self.carrier_words(nw, lead, tail);
+        self.code_words(block.table(), nw, lead, tail);
         if l3 {
-            for r in replica.iter() {
-                self.support[0] += kernel::popcount(r.carrier.nzc);
-                self.support[1] += kernel::popcount(r.carrier.nzs);
+            for c in self.work.carrier.iter().take(nw) {
+                self.support[0] += kernel::popcount(c.nzc);
+                self.support[1] += kernel::popcount(c.nzs);
             }
         } else {
             let m = (stop - s) as u32;
             self.support[0] += m;
             self.support[1] += m;
         }
+        let (cx, tb) = (self.format.complex, self.format.two_bit());
+        let edges = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
+        let work = &mut self.work;
         for (a, acc) in self.acc.iter_mut().enumerate() {
             let Some(planes) = block.planes(a) else {
                 continue;
             };
-            let Some(p) = chunk_planes(planes, w0, w1, self.format) else {
+            let Some(p) = chunk_planes(planes, w0, w0 + nw, self.format) else {
                 continue;
             };
             let all = a == 0 || self.slave_taps == SlaveTaps::All;
+            let n = (nw, edges);
             match (cx, tb, l3) {
-                (true, false, false) => antenna::<true, false, false>(p, replica, all, edges, acc),
-                (true, true, false) => antenna::<true, true, false>(p, replica, all, edges, acc),
-                (true, false, true) => antenna::<true, false, true>(p, replica, all, edges, acc),
-                (true, true, true) => antenna::<true, true, true>(p, replica, all, edges, acc),
-                (false, false, false) => {
-                    antenna::<false, false, false>(p, replica, all, edges, acc);
-                }
-                (false, true, false) => antenna::<false, true, false>(p, replica, all, edges, acc),
-                (false, false, true) => antenna::<false, false, true>(p, replica, all, edges, acc),
-                (false, true, true) => antenna::<false, true, true>(p, replica, all, edges, acc),
+                (true, false, false) => antenna::<true, false, false>(p, work, n, all, acc),
+                (true, true, false) => antenna::<true, true, false>(p, work, n, all, acc),
+                (true, false, true) => antenna::<true, false, true>(p, work, n, all, acc),
+                (true, true, true) => antenna::<true, true, true>(p, work, n, all, acc),
+                (false, false, false) => antenna::<false, false, false>(p, work, n, all, acc),
+                (false, true, false) => antenna::<false, true, false>(p, work, n, all, acc),
+                (false, false, true) => antenna::<false, false, true>(p, work, n, all, acc),
+                (false, true, true) => antenna::<false, true, true>(p, work, n, all, acc),
             }
         }
     }
 
-    /// The carrier words of the chunk, with the span's edges masked out (`lead` samples before
-    /// the span in the first word, `tail` after it in the last).
-    fn fill_carrier(&self, replica: &mut [ReplicaWord], lead: usize, tail: usize) {
-        let mut words = [CarrierWords::default(); CHUNK_WORDS];
-        let words = words.get_mut(..replica.len()).unwrap_or_default();
+    /// The carrier words of the chunk's `nw` words into the workspace, with the span's edges
+    /// masked out (`lead` samples before the span in the first word, `tail` after it in the
+    /// last).
+    fn carrier_words(&mut self, nw: usize, lead: usize, tail: usize) {
         let phase = self
             .carrier
             .phase
             .wrapping_sub(self.carrier.step.wrapping_mul(lead as u32));
         let step = CarrierStep::new(self.carrier.step);
-        match self.levels {
-            CarrierLevels::Two => carrier::two_level(words, phase, &step),
-            CarrierLevels::Three => carrier::three_level(words, phase, &step),
-        };
+        let words = self.work.carrier.get_mut(..nw).unwrap_or_default();
+        carrier::fill(words, self.levels, phase, &step);
         if let Some(first) = words.first_mut() {
             let mask = u32::MAX << (lead & 31);
             first.nzc &= mask;
@@ -500,18 +491,16 @@ impl<const A: usize> BitCorrelator<A> {
             last.nzc &= mask;
             last.nzs &= mask;
         }
-        for (r, w) in replica.iter_mut().zip(words.iter()) {
-            r.carrier = *w;
-        }
     }
 
-    /// The code words of the chunk's four taps: the prompt string from
-    /// [`BACK_WORDS`]-bounded margins, the taps as shifted windows of it.
-    fn fill_code(&self, table: &CodeTable, replica: &mut [ReplicaWord], lead: usize) {
+    /// The code words of the chunk's four taps (E, P, L, N) into the workspace: the prompt
+    /// string with margins for the shifted taps, the taps as 32-bit windows of it, masked with
+    /// the carrier supports (3-level) or the span's edges (2-level).
+    fn code_words(&mut self, table: &CodeTable, nw: usize, lead: usize, tail: usize) {
         let d = self.offset;
         let back = self.noise_delay.max(d).div_ceil(WORD_SAMPLES);
         let forward = d.div_ceil(WORD_SAMPLES);
-        let words = (replica.len() + back + forward + 1).min(PROMPT_WORDS);
+        let words = nw + back + forward + 1;
         let step = self.code.step;
         // Code phase at the first sample of the first prompt word.
         let behind = ((lead + back * WORD_SAMPLES) as u64 * step) % CODE_WRAP;
@@ -520,35 +509,79 @@ impl<const A: usize> BitCorrelator<A> {
         let word_step = WORD_SAMPLES as u64 * step;
         let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
         let step4 = (step >> 2) as u32;
-        let mut prompt = [0u32; PROMPT_WORDS];
-        for p in prompt.iter_mut().take(words) {
+        let work = &mut self.work;
+        for p in work.prompt.iter_mut().take(words) {
             *p = code::prompt_word(&self.ext, table, at, step4);
             at.advance(chips, frac);
         }
         let base = back * WORD_SAMPLES;
-        fill_tap(replica, &prompt, base + d, EARLY);
-        fill_tap(replica, &prompt, base, PROMPT);
-        fill_tap(replica, &prompt, base - d, LATE);
-        fill_tap(replica, &prompt, base - self.noise_delay, NOISE);
-    }
-}
-
-/// Tap `tap` of every replica word: 32 bits of the prompt string from bit `offset + 32·i`.
-fn fill_tap(replica: &mut [ReplicaWord], prompt: &[u32], offset: usize, tap: usize) {
-    let sh = (offset % WORD_SAMPLES) as u32;
-    let src = prompt.get(offset / WORD_SAMPLES..).unwrap_or_default();
-    for (r, pair) in replica.iter_mut().zip(src.windows(2)) {
-        if let (Some(t), &[lo, hi]) = (r.taps.get_mut(tap), pair) {
-            *t = (lo >> sh) | ((hi << 1) << (31 - sh));
+        let offsets = [base + d, base, base - d, base - self.noise_delay];
+        for (taps, offset) in work.taps.iter_mut().zip(offsets) {
+            window_words(taps.get_mut(..nw).unwrap_or_default(), &work.prompt, offset);
+        }
+        if self.levels == CarrierLevels::Three {
+            let carrier = work.carrier.iter().take(nw);
+            for (tc, ts) in work.taps.iter_mut().zip(work.taps_s.iter_mut()) {
+                for ((c, s), r) in tc.iter_mut().zip(ts.iter_mut()).zip(carrier.clone()) {
+                    *s = *c & r.nzs;
+                    *c &= r.nzc;
+                }
+            }
+        } else {
+            let masks = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
+            for taps in work.taps.iter_mut() {
+                if let Some(w) = taps.first_mut() {
+                    *w &= masks[0];
+                }
+                if let Some(w) = taps.get_mut(nw.wrapping_sub(1)) {
+                    *w &= masks[1];
+                }
+            }
         }
     }
 }
 
-/// Which words of a chunk are partial (the span starts or ends inside them).
-#[derive(Clone, Copy, Debug)]
-struct Edges {
-    first: bool,
-    last: bool,
+/// The chunk loop's scratch: the replica of one chunk, shared by the antennas, and the stream
+/// words of the antenna being correlated (2.8 KiB).
+#[derive(Clone, Debug)]
+struct Workspace {
+    carrier: [CarrierWords; CHUNK_WORDS],
+    /// The prompt string of the chunk and its margins.
+    prompt: [u32; PROMPT_WORDS],
+    /// Code words per tap (E, P, L, N), masked with the `c ≠ 0` support (and the span).
+    taps: [[u32; CHUNK_WORDS]; 4],
+    /// The same masked with the `s ≠ 0` support (3-level carrier only).
+    taps_s: [[u32; CHUNK_WORDS]; 4],
+    streams: StreamWords,
+}
+
+impl Workspace {
+    const fn new() -> Self {
+        Self {
+            carrier: [CarrierWords {
+                c: 0,
+                s: 0,
+                d: 0,
+                nzc: 0,
+                nzs: 0,
+            }; CHUNK_WORDS],
+            prompt: [0; PROMPT_WORDS],
+            taps: [[0; CHUNK_WORDS]; 4],
+            taps_s: [[0; CHUNK_WORDS]; 4],
+            streams: [[0; CHUNK_WORDS]; MAX_STREAMS],
+        }
+    }
+}
+
+/// 32-bit windows of the prompt string: `out[i]` is bits `offset + 32·i …` of `prompt`.
+fn window_words(out: &mut [u32], prompt: &[u32; PROMPT_WORDS], offset: usize) {
+    let sh = (offset % WORD_SAMPLES) as u32;
+    let src = prompt.get(offset / WORD_SAMPLES..).unwrap_or_default();
+    for (o, pair) in out.iter_mut().zip(src.windows(2)) {
+        if let &[lo, hi] = pair {
+            *o = (lo >> sh) | ((hi << 1) << (31 - sh));
+        }
+    }
 }
 
 /// The chunk's words of an antenna's planes (absent planes replaced by the sign plane).
@@ -574,65 +607,59 @@ fn chunk_planes<'a>(
     Some(ChunkPlanes { a, ma, b, mb })
 }
 
-/// One antenna over one chunk: the taps it computes, partial words with the span mask.
+/// One antenna over one chunk: its stream words, then the population counts of every
+/// stream against the code words of every tap it computes (all four for the reference antenna,
+/// or for every antenna with [`SlaveTaps::All`]; the prompt otherwise). `chunk` is the word
+/// count and the span's masks of the first and last word.
 #[inline(never)]
 fn antenna<const CX: bool, const TB: bool, const L3: bool>(
     p: ChunkPlanes<'_>,
-    replica: &[ReplicaWord],
-    all_taps: bool,
-    edges: Edges,
-    acc: &mut [[u32; MAX_STREAMS]; 4],
-) {
-    if L3 {
-        // The 3-level carrier masks every word anyway; the span's edges are in the masks.
-        taps::<CX, TB, L3, true>(p, replica, all_taps, acc);
-        return;
-    }
-    let nw = replica.len();
-    let lo = usize::from(edges.first);
-    let hi = if edges.last && nw > lo { nw - 1 } else { nw };
-    if edges.first {
-        taps::<CX, TB, L3, true>(
-            window(p, 0, 1),
-            replica.get(..1).unwrap_or_default(),
-            all_taps,
-            acc,
-        );
-    }
-    if hi > lo {
-        let r = replica.get(lo..hi).unwrap_or_default();
-        taps::<CX, TB, L3, false>(window(p, lo, hi), r, all_taps, acc);
-    }
-    if hi < nw && nw > lo {
-        let r = replica.get(hi..nw).unwrap_or_default();
-        taps::<CX, TB, L3, true>(window(p, hi, nw), r, all_taps, acc);
-    }
-}
-
-/// Words `lo..hi` of chunk planes.
-fn window<'a>(p: ChunkPlanes<'a>, lo: usize, hi: usize) -> ChunkPlanes<'a> {
-    let cut = |s: &'a [u32]| s.get(lo..hi).unwrap_or_default();
-    ChunkPlanes {
-        a: cut(p.a),
-        ma: cut(p.ma),
-        b: cut(p.b),
-        mb: cut(p.mb),
-    }
-}
-
-/// The kernel passes of one antenna: E and P, then L and N (reference antenna, or every
-/// antenna with [`SlaveTaps::All`]), or P alone.
-#[inline(always)]
-fn taps<const CX: bool, const TB: bool, const L3: bool, const MASKED: bool>(
-    p: ChunkPlanes<'_>,
-    replica: &[ReplicaWord],
+    work: &mut Workspace,
+    chunk: (usize, [u32; 2]),
     all_taps: bool,
     acc: &mut [[u32; MAX_STREAMS]; 4],
 ) {
-    if all_taps {
-        kernel::accumulate::<CX, TB, L3, 2, MASKED>(p, replica, [EARLY, PROMPT], acc);
-        kernel::accumulate::<CX, TB, L3, 2, MASKED>(p, replica, [LATE, NOISE], acc);
+    let (n, [lead_mask, tail_mask]) = chunk;
+    let n = n.min(CHUNK_WORDS);
+    let j_count = kernel::stream_count(CX, TB, L3);
+    let scratch = &mut work.streams;
+    kernel::prepare::<CX, TB, L3>(p, work.carrier.get(..n).unwrap_or_default(), scratch);
+    if !L3 {
+        // The 2-level streams are masked at the span's edges only.
+        for stream in scratch.iter_mut().take(j_count) {
+            if let Some(w) = stream.first_mut() {
+                *w &= lead_mask;
+            }
+            if let Some(w) = stream.get_mut(n.wrapping_sub(1)) {
+                *w &= tail_mask;
+            }
+        }
+    }
+    let taps: &[usize] = if all_taps {
+        &[EARLY, PROMPT, LATE, NOISE]
     } else {
-        kernel::accumulate::<CX, TB, L3, 1, MASKED>(p, replica, [PROMPT], acc);
+        &[PROMPT]
+    };
+    for &t in taps {
+        let (Some(code_c), Some(code_s), Some(sums)) =
+            (work.taps.get(t), work.taps_s.get(t), acc.get_mut(t))
+        else {
+            continue;
+        };
+        let code_s = if L3 { code_s } else { code_c };
+        for (j, (stream, sum)) in scratch
+            .iter()
+            .zip(sums.iter_mut())
+            .take(j_count)
+            .enumerate()
+        {
+            let code = if kernel::stream_uses_s(CX, TB, L3, j) {
+                code_s
+            } else {
+                code_c
+            };
+            let x = stream.get(..n).unwrap_or_default();
+            *sum += kernel::xor_count(x, code.get(..n).unwrap_or_default());
+        }
     }
 }

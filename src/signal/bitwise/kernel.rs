@@ -21,26 +21,23 @@
 //! : x_I c)`, one sample component each: two streams instead of four (`X̂ = X/2`, `Ŷ = Y/2`).
 //!
 //! # Population counts
-//! Per stream word: `v − ((v ≫ 1) & 0x55…)` (2-bit counts) and one more step to 4-bit counts
-//! (at most 4 each), added over three words (at most 12, no overflow), folded into 8-bit
-//! counts (at most 24 per fold, ten folds per chunk of [`CHUNK_WORDS`] = 30 words ≤ 240), and
-//! summed into the 32-bit total once per chunk.
+//! Stream-major: each stream's words of a chunk are prepared once per antenna
+//! ([`prepare`]), then every tap's sum is one loop over two word arrays ([`xor_count`]):
+//! `v − ((v ≫ 1) & 0x55…)` (2-bit counts), one more step to 4-bit counts (at most 4 each),
+//! added over three words (at most 12, no overflow), folded into 8-bit counts (at most 8 per
+//! word, 240 for a chunk of [`CHUNK_WORDS`] = 30 words), summed into the 32-bit total once per
+//! chunk. Every operand of the loop fits the Cortex-M4's registers.
 
 use super::carrier::CarrierWords;
 
-/// Words per chunk of the kernels (the 8-bit counters' bound: 10 folds of 24).
+/// Words per chunk of the kernels (the 8-bit counters' bound: 30 words of at most 8 each).
 pub(crate) const CHUNK_WORDS: usize = 30;
 
 /// Largest number of streams per tap (2-bit complex samples, 3-level carrier).
 pub(crate) const MAX_STREAMS: usize = 8;
 
-/// The replica of one word: carrier words and the code words of the four taps
-/// (early, prompt, late, noise).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct ReplicaWord {
-    pub(crate) carrier: CarrierWords,
-    pub(crate) taps: [u32; 4],
-}
+/// The stream words of one antenna over a chunk, stream-major (scratch reused chunk by chunk).
+pub(crate) type StreamWords = [[u32; CHUNK_WORDS]; MAX_STREAMS];
 
 /// The planes of one antenna over a chunk (each as long as the chunk; a plane the format does
 /// not have is replaced by the sign plane and ignored).
@@ -75,7 +72,7 @@ pub(crate) const fn stream_uses_s(complex: bool, two_bit: bool, three: bool, j: 
     }
 }
 
-/// The stream words and their support masks of one word.
+/// The stream words of one word.
 #[inline(always)]
 fn streams<const CX: bool, const TB: bool, const L3: bool>(
     a: u32,
@@ -83,40 +80,67 @@ fn streams<const CX: bool, const TB: bool, const L3: bool>(
     b: u32,
     mb: u32,
     r: &CarrierWords,
-) -> ([u32; MAX_STREAMS], [u32; MAX_STREAMS]) {
-    let (c, s, zc, zs) = (r.c, r.s, r.nzc, r.nzs);
+) -> [u32; MAX_STREAMS] {
+    let (c, s) = (r.c, r.s);
     let ta = a ^ ma;
     let tb = b ^ mb;
-    let mut u = [0u32; MAX_STREAMS];
-    let mut m = [0u32; MAX_STREAMS];
     if CX && !L3 {
         let g = (a ^ b) & r.d;
-        let x = b ^ g;
-        let y = a ^ g;
+        let (x, y) = (b ^ g, a ^ g);
         if TB {
             let h = (ta ^ tb) & r.d;
-            u[..4].copy_from_slice(&[x ^ c, tb ^ h ^ c, y ^ s, ta ^ h ^ s]);
-            m[..4].copy_from_slice(&[zc, zc, zs, zs]);
+            [x ^ c, tb ^ h ^ c, y ^ s, ta ^ h ^ s, 0, 0, 0, 0]
         } else {
-            u[..2].copy_from_slice(&[x ^ c, y ^ s]);
-            m[..2].copy_from_slice(&[zc, zs]);
+            [x ^ c, y ^ s, 0, 0, 0, 0, 0, 0]
         }
     } else if CX {
         if TB {
-            u.copy_from_slice(&[a ^ c, ta ^ c, b ^ s, tb ^ s, b ^ c, tb ^ c, a ^ s, ta ^ s]);
-            m.copy_from_slice(&[zc, zc, zs, zs, zc, zc, zs, zs]);
+            [a ^ c, ta ^ c, b ^ s, tb ^ s, b ^ c, tb ^ c, a ^ s, ta ^ s]
         } else {
-            u[..4].copy_from_slice(&[a ^ c, b ^ s, b ^ c, a ^ s]);
-            m[..4].copy_from_slice(&[zc, zs, zc, zs]);
+            [a ^ c, b ^ s, b ^ c, a ^ s, 0, 0, 0, 0]
         }
     } else if TB {
-        u[..4].copy_from_slice(&[a ^ c, ta ^ c, a ^ s, ta ^ s]);
-        m[..4].copy_from_slice(&[zc, zc, zs, zs]);
+        [a ^ c, ta ^ c, a ^ s, ta ^ s, 0, 0, 0, 0]
     } else {
-        u[..2].copy_from_slice(&[a ^ c, a ^ s]);
-        m[..2].copy_from_slice(&[zc, zs]);
+        [a ^ c, a ^ s, 0, 0, 0, 0, 0, 0]
     }
-    (u, m)
+}
+
+/// Fills `out` with the stream words of the chunk's words (`carrier.len()` of them, at most
+/// [`CHUNK_WORDS`]), each ANDed with its support mask when `MASK` (3-level carrier); the
+/// 2-level carrier's masks are all ones except at a span's edges, which the caller applies to
+/// the first and last word only.
+#[inline(always)]
+pub(crate) fn prepare<const CX: bool, const TB: bool, const L3: bool>(
+    planes: ChunkPlanes<'_>,
+    carrier: &[CarrierWords],
+    out: &mut StreamWords,
+) {
+    let j_count = stream_count(CX, TB, L3);
+    let words = carrier
+        .iter()
+        .zip(planes.a)
+        .zip(planes.ma)
+        .zip(planes.b)
+        .zip(planes.mb)
+        .enumerate();
+    for (w, ((((r, &a), &ma), &b), &mb)) in words {
+        let u = streams::<CX, TB, L3>(a, ma, b, mb, r);
+        for (j, (stream, &x)) in out.iter_mut().zip(u.iter()).take(j_count).enumerate() {
+            let m = if L3 {
+                if stream_uses_s(CX, TB, L3, j) {
+                    r.nzs
+                } else {
+                    r.nzc
+                }
+            } else {
+                u32::MAX
+            };
+            if let Some(slot) = stream.get_mut(w) {
+                *slot = x & m;
+            }
+        }
+    }
 }
 
 /// 4-bit population counts of `v` (each nibble 0–4).
@@ -145,73 +169,30 @@ pub(crate) fn popcount(v: u32) -> u32 {
     byte_total(byte_counts(nibble_counts(v)))
 }
 
-/// Adds, for each tap `taps[t]` and stream `j`, the population count of
-/// `(stream_j ⊕ tap) [& support_j]` over the chunk's words to `acc[t][j]`. `MASKED` applies
-/// the support masks (3-level carrier, or a span edge); without it every bit counts.
-/// At most [`CHUNK_WORDS`] words (shorter slices bound the chunk).
+/// `Σ popcount(x_w ⊕ t_w)` over the common words of `x` and `t`, at most [`CHUNK_WORDS`]:
+/// 4-bit counts summed over three words (at most 12), folded into 8-bit counts (at most
+/// 8 per word, 240 for 30 words), summed once at the end.
 #[inline(always)]
-pub(crate) fn accumulate<
-    const CX: bool,
-    const TB: bool,
-    const L3: bool,
-    const NT: usize,
-    const MASKED: bool,
->(
-    planes: ChunkPlanes<'_>,
-    replica: &[ReplicaWord],
-    taps: [usize; NT],
-    acc: &mut [[u32; MAX_STREAMS]; 4],
-) {
-    let j_count = stream_count(CX, TB, L3);
-    let mut nib = [[0u32; MAX_STREAMS]; NT];
-    let mut bytes = [[0u32; MAX_STREAMS]; NT];
-    let mut in_group = 0u32;
-    let words = replica
-        .iter()
-        .take(CHUNK_WORDS)
-        .zip(planes.a)
-        .zip(planes.ma)
-        .zip(planes.b)
-        .zip(planes.mb);
-    for ((((r, &a), &ma), &b), &mb) in words {
-        let (u, m) = streams::<CX, TB, L3>(a, ma, b, mb, &r.carrier);
-        for (t, &tap) in taps.iter().enumerate() {
-            let code = r.taps[tap & 3];
-            for j in 0..j_count {
-                let mut v = u[j] ^ code;
-                if MASKED {
-                    v &= m[j];
-                }
-                nib[t][j] += nibble_counts(v);
-            }
-        }
-        in_group += 1;
-        if in_group == 3 {
-            fold(&mut nib, &mut bytes, j_count);
-            in_group = 0;
+pub(crate) fn xor_count(x: &[u32], t: &[u32]) -> u32 {
+    let n = x.len().min(t.len()).min(CHUNK_WORDS);
+    let (x, t) = (
+        x.get(..n).unwrap_or_default(),
+        t.get(..n).unwrap_or_default(),
+    );
+    let mut bytes = 0u32;
+    let mut xs = x.chunks_exact(3);
+    let mut ts = t.chunks_exact(3);
+    for (a, b) in (&mut xs).zip(&mut ts) {
+        if let (&[a0, a1, a2], &[b0, b1, b2]) = (a, b) {
+            let nib = nibble_counts(a0 ^ b0) + nibble_counts(a1 ^ b1) + nibble_counts(a2 ^ b2);
+            bytes += byte_counts(nib);
         }
     }
-    fold(&mut nib, &mut bytes, j_count);
-    for (t, &tap) in taps.iter().enumerate() {
-        for j in 0..j_count {
-            acc[tap & 3][j] += byte_total(bytes[t][j]);
-        }
+    let mut nib = 0;
+    for (&a, &b) in xs.remainder().iter().zip(ts.remainder()) {
+        nib += nibble_counts(a ^ b);
     }
-}
-
-/// Moves the 4-bit counters into the 8-bit counters.
-#[inline(always)]
-fn fold<const NT: usize>(
-    nib: &mut [[u32; MAX_STREAMS]; NT],
-    bytes: &mut [[u32; MAX_STREAMS]; NT],
-    j_count: usize,
-) {
-    for (n, b) in nib.iter_mut().zip(bytes.iter_mut()) {
-        for j in 0..j_count {
-            b[j] += byte_counts(n[j]);
-            n[j] = 0;
-        }
-    }
+    byte_total(bytes + byte_counts(nib))
 }
 
 /// `(I, Q)` of one tap from its streams' population counts `p` and the support counts `nc`
@@ -259,6 +240,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn xor_count_is_exact_for_every_length() {
+        let mut x = [0u32; CHUNK_WORDS];
+        let mut t = [0u32; CHUNK_WORDS];
+        let mut r = 0x1234_5677u32;
+        for (a, b) in x.iter_mut().zip(t.iter_mut()) {
+            r ^= r << 13;
+            r ^= r >> 17;
+            r ^= r << 5;
+            *a = r;
+            *b = r.rotate_left(7) ^ 0x0f0f_f0f0;
+        }
+        for n in 0..=CHUNK_WORDS {
+            let want: u32 = x[..n]
+                .iter()
+                .zip(&t[..n])
+                .map(|(a, b)| (a ^ b).count_ones())
+                .sum();
+            assert_eq!(xor_count(&x[..n], &t[..n]), want);
+        }
+        let ones = [u32::MAX; CHUNK_WORDS];
+        assert_eq!(xor_count(&ones, &[0; CHUNK_WORDS]), 960);
+    }
+
+    #[test]
     fn swar_popcount_is_exact() {
         let mut x = 0x9e37_79b9u32;
         for _ in 0..10_000 {
@@ -269,11 +274,5 @@ mod tests {
         }
         assert_eq!(popcount(u32::MAX), 32);
         assert_eq!(popcount(0), 0);
-        // The deferred reduction's bounds: 3 words of all ones per nibble, 10 folds per byte.
-        let mut bytes = 0u32;
-        for _ in 0..10 {
-            bytes += byte_counts(3 * nibble_counts(u32::MAX));
-        }
-        assert_eq!(byte_total(bytes), 960);
     }
 }

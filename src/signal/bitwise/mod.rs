@@ -7,6 +7,7 @@ pub mod correlator;
 mod kernel;
 pub mod planes;
 pub mod reference;
+pub mod selftest;
 
 pub use block::BitBlock;
 pub use carrier::CarrierLevels;

@@ -375,7 +375,7 @@ impl<const W: usize> PlaneBuffer<W> {
         }
     }
 
-    /// The bits of the last, partial word: sample count `n` masks the word.
+    /// The bits of word `w` that hold samples when `n` samples are packed.
     fn tail_mask(n: usize, w: usize) -> u32 {
         let valid = n.saturating_sub(w * WORD_SAMPLES);
         if valid >= WORD_SAMPLES {
@@ -385,29 +385,59 @@ impl<const W: usize> PlaneBuffer<W> {
         }
     }
 
-    /// `Sign1`: eight samples a byte, first sample in the most significant bit: the bits of
-    /// each byte reversed.
-    fn pack_sign1(&mut self, bytes: &[u8], n: usize) {
-        for w in 0..n.div_ceil(WORD_SAMPLES).min(W) {
-            let word = le_word(bytes, 4 * w);
-            let signs = word.reverse_bits().swap_bytes() & Self::tail_mask(n, w);
-            self.set_word(w, [signs, 0, 0, 0]);
+    /// Packs `n` samples from `bytes`, `B` bytes per word, with `word` turning one word's
+    /// bytes into the four plane words; the last, partial word from a zero-padded copy.
+    #[inline(always)]
+    fn pack_words<const B: usize>(
+        &mut self,
+        bytes: &[u8],
+        n: usize,
+        word: impl Fn(&[u8; B]) -> [u32; 4],
+    ) {
+        let words = n.div_ceil(WORD_SAMPLES).min(W);
+        let full = (n / WORD_SAMPLES).min(words);
+        let mut chunks = bytes.chunks_exact(B);
+        for (w, chunk) in (&mut chunks).take(full).enumerate() {
+            if let Ok(b) = <&[u8; B]>::try_from(chunk) {
+                self.set_word(w, word(b));
+            }
+        }
+        if full < words {
+            let mut last = [0u8; B];
+            let from = bytes.get(full * B..).unwrap_or_default();
+            for (d, &b) in last.iter_mut().zip(from) {
+                *d = b;
+            }
+            let mask = Self::tail_mask(n, full);
+            self.set_word(full, word(&last).map(|v| v & mask));
         }
     }
 
+    /// `Sign1`: eight samples a byte, first sample in the most significant bit: the bits of
+    /// each byte reversed.
+    fn pack_sign1(&mut self, bytes: &[u8], n: usize) {
+        self.pack_words::<4>(bytes, n, |b| {
+            [u32::from_le_bytes(*b).reverse_bits().swap_bytes(), 0, 0, 0]
+        });
+    }
+
     /// `SignMagnitude2`, real: four samples a byte (first in bits 7–6); a table sorts each
-    /// byte into four sign bits (low nibble) and four magnitude bits (high nibble).
+    /// byte into four sign bits (low nibble) and four magnitude bits (high nibble), two bytes
+    /// give a byte of each plane.
     fn pack_sm2(&mut self, bytes: &[u8], n: usize) {
-        for w in 0..n.div_ceil(WORD_SAMPLES).min(W) {
+        self.pack_words::<8>(bytes, n, |b| {
             let (mut s, mut m) = (0u32, 0u32);
-            for b in 0..8 {
-                let v = u32::from(SM2_REAL[usize::from(byte_at(bytes, 8 * w + b))]);
-                s |= (v & 0xf) << (4 * b);
-                m |= (v >> 4) << (4 * b);
+            for (k, pair) in b.chunks_exact(2).enumerate() {
+                if let &[x, y] = pair {
+                    let v = u32::from(SM2_REAL[usize::from(x)])
+                        | (u32::from(SM2_REAL[usize::from(y)]) << 8);
+                    // v: bits 0–3 and 8–11 signs, 4–7 and 12–15 magnitudes (as nibbles).
+                    s |= ((v & 0xf) | ((v >> 4) & 0xf0)) << (8 * k);
+                    m |= (((v >> 4) & 0xf) | ((v >> 8) & 0xf0)) << (8 * k);
+                }
             }
-            let mask = Self::tail_mask(n, w);
-            self.set_word(w, [s & mask, m & mask, 0, 0]);
-        }
+            [s, m, 0, 0]
+        });
     }
 
     /// `SignMagnitude2`, complex: two samples a byte (first in the high nibble: I sign, I
@@ -415,12 +445,12 @@ impl<const W: usize> PlaneBuffer<W> {
     /// planes (two bits each, one plane per byte of the table entry); four bytes make eight
     /// samples of each plane, and four such groups a word.
     fn pack_sm2iq(&mut self, bytes: &[u8], n: usize) {
-        for w in 0..n.div_ceil(WORD_SAMPLES).min(W) {
+        self.pack_words::<16>(bytes, n, |b| {
             let mut acc = [0u32; 4];
-            for (g, a) in acc.iter_mut().enumerate() {
-                for b in 0..4 {
-                    let byte = byte_at(bytes, 16 * w + 4 * g + b);
-                    *a |= SM2_COMPLEX[usize::from(byte)] << (2 * b);
+            for (a, quad) in acc.iter_mut().zip(b.chunks_exact(4)) {
+                if let &[x0, x1, x2, x3] = quad {
+                    let t = |x: u8| SM2_COMPLEX[usize::from(x)];
+                    *a = t(x0) | (t(x1) << 2) | (t(x2) << 4) | (t(x3) << 6);
                 }
             }
             // Byte p of acc[g] is plane p's samples 8g..8g+7: a 4×4 byte transpose.
@@ -428,13 +458,13 @@ impl<const W: usize> PlaneBuffer<W> {
             let t1 = ((acc[0] >> 8) & 0x00ff_00ff) | (acc[1] & 0xff00_ff00);
             let t2 = (acc[2] & 0x00ff_00ff) | ((acc[3] & 0x00ff_00ff) << 8);
             let t3 = ((acc[2] >> 8) & 0x00ff_00ff) | (acc[3] & 0xff00_ff00);
-            let mask = Self::tail_mask(n, w);
-            let p0 = (t0 & 0xffff) | (t2 << 16);
-            let p1 = (t1 & 0xffff) | (t3 << 16);
-            let p2 = (t0 >> 16) | (t2 & 0xffff_0000);
-            let p3 = (t1 >> 16) | (t3 & 0xffff_0000);
-            self.set_word(w, [p0 & mask, p1 & mask, p2 & mask, p3 & mask]);
-        }
+            [
+                (t0 & 0xffff) | (t2 << 16),
+                (t1 & 0xffff) | (t3 << 16),
+                (t0 >> 16) | (t2 & 0xffff_0000),
+                (t1 >> 16) | (t3 & 0xffff_0000),
+            ]
+        });
     }
 
     /// `MultiChannel2`: one byte per sample; channel `c`'s sign and magnitude bits (`2c + 1`,
@@ -444,51 +474,44 @@ impl<const W: usize> PlaneBuffer<W> {
         // Bit 8j (j = 0..3) times 2^(24 − 7j) lands on bit 24 + j; no two partial products
         // share a bit, so there are no carries.
         let gather = |x: u32| ((x & 0x0101_0101).wrapping_mul(0x0102_0408)) >> 24;
-        for w in 0..n.div_ceil(WORD_SAMPLES).min(W) {
+        self.pack_words::<32>(bytes, n, |b| {
             let (mut s, mut m) = (0u32, 0u32);
-            for g in 0..8 {
-                let x = le_word(bytes, 32 * w + 4 * g) >> shift;
-                s |= gather(x >> 1) << (4 * g);
-                m |= gather(x) << (4 * g);
+            for (g, quad) in b.chunks_exact(4).enumerate() {
+                if let &[x0, x1, x2, x3] = quad {
+                    let x = u32::from_le_bytes([x0, x1, x2, x3]) >> shift;
+                    s |= gather(x >> 1) << (4 * g);
+                    m |= gather(x) << (4 * g);
+                }
             }
-            let mask = Self::tail_mask(n, w);
-            self.set_word(w, [s & mask, m & mask, 0, 0]);
-        }
+            [s, m, 0, 0]
+        });
     }
 
     /// `Cs8` (`stride` 2: I then Q) and `Int8` (`stride` 1): the sign bit of each byte.
     fn pack_signs_of_bytes(&mut self, bytes: &[u8], n: usize, stride: usize) {
-        for w in 0..n.div_ceil(WORD_SAMPLES).min(W) {
-            let (mut si, mut sq) = (0u32, 0u32);
-            for k in 0..WORD_SAMPLES {
-                let at = stride * (WORD_SAMPLES * w + k);
-                si |= u32::from(byte_at(bytes, at) >> 7) << k;
-                sq |= u32::from(byte_at(bytes, at + 1) >> 7) << k;
-            }
-            let mask = Self::tail_mask(n, w);
-            let sq = if stride == 2 { sq & mask } else { 0 };
-            self.set_word(w, [si & mask, 0, sq, 0]);
+        let gather = |x: u32| (((x >> 7) & 0x0101_0101).wrapping_mul(0x0102_0408)) >> 24;
+        if stride == 2 {
+            self.pack_words::<64>(bytes, n, |b| {
+                let (mut si, mut sq) = (0u32, 0u32);
+                for (g, oct) in b.chunks_exact(8).enumerate() {
+                    if let &[i0, q0, i1, q1, i2, q2, i3, q3] = oct {
+                        si |= gather(u32::from_le_bytes([i0, i1, i2, i3])) << (4 * g);
+                        sq |= gather(u32::from_le_bytes([q0, q1, q2, q3])) << (4 * g);
+                    }
+                }
+                [si, 0, sq, 0]
+            });
+        } else {
+            self.pack_words::<32>(bytes, n, |b| {
+                let mut si = 0u32;
+                for (g, quad) in b.chunks_exact(4).enumerate() {
+                    if let &[x0, x1, x2, x3] = quad {
+                        si |= gather(u32::from_le_bytes([x0, x1, x2, x3])) << (4 * g);
+                    }
+                }
+                [si, 0, 0, 0]
+            });
         }
-    }
-}
-
-/// Byte `k` of `bytes`, 0 beyond the end.
-#[inline(always)]
-fn byte_at(bytes: &[u8], k: usize) -> u8 {
-    bytes.get(k).copied().unwrap_or(0)
-}
-
-/// The little-endian word of bytes `k..k + 4` (missing bytes read as 0).
-#[inline(always)]
-fn le_word(bytes: &[u8], k: usize) -> u32 {
-    match bytes.get(k..k + 4) {
-        Some(&[a, b, c, d]) => u32::from_le_bytes([a, b, c, d]),
-        _ => u32::from_le_bytes([
-            byte_at(bytes, k),
-            byte_at(bytes, k + 1),
-            byte_at(bytes, k + 2),
-            byte_at(bytes, k + 3),
-        ]),
     }
 }
 
