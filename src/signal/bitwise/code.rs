@@ -42,8 +42,9 @@ pub const CODE_TABLE_LEN: usize = 1 << (CODE_TABLE_FRACTION_BITS + CODE_TABLE_CH
 /// Smallest sample rate the byte table supports, Hz (two samples per chip).
 pub const MIN_TABLE_SAMPLE_RATE_HZ: f64 = 2.0 * CA_CHIP_RATE_HZ;
 
-/// Words of the extended code: chips `0 … 32·EXT_WORDS − 1`, chip `c` = code chip `c mod 1023`.
-pub(crate) const EXT_WORDS: usize = 34;
+/// Bytes of the extended code: chips `0 … 8·EXT_BYTES − 1`, chip `c` = code chip
+/// `c mod 1023` (bit `c mod 8` of byte `c / 8`), read as unaligned little-endian words.
+pub(crate) const EXT_BYTES: usize = 136;
 
 /// The chip-to-sample expansion table of one sample rate (8 KiB), shared by the correlators of
 /// a front end. Entry `q·32 + chips` holds, in bit `i`, bit `o(q, i)` of `chips` (see the
@@ -116,12 +117,12 @@ pub const fn expansion_offset(q: u64, i: u64, table_step: u64) -> u64 {
 }
 
 /// The code of `prn` repeated: bit `c` of the result is the logic value of chip `c mod 1023`.
-pub(crate) fn extended_code(prn: Prn) -> [u32; EXT_WORDS] {
-    let mut out = [0u32; EXT_WORDS];
-    for c in 0..EXT_WORDS * 32 {
-        let bit = u32::from(prn.chip_bit(c % CA_CODE_LENGTH));
-        if let Some(w) = out.get_mut(c / 32) {
-            *w |= bit << (c % 32);
+pub(crate) fn extended_code(prn: Prn) -> [u8; EXT_BYTES] {
+    let mut out = [0u8; EXT_BYTES];
+    for c in 0..EXT_BYTES * 8 {
+        let bit = prn.chip_bit(c % CA_CODE_LENGTH);
+        if let Some(b) = out.get_mut(c / 8) {
+            *b |= bit << (c % 8);
         }
     }
     out
@@ -165,17 +166,19 @@ impl CodeCursor {
 /// whose first sample has code phase `at`; `step4 = ⌊s/4⌋`.
 #[inline(always)]
 pub(crate) fn prompt_word(
-    ext: &[u32; EXT_WORDS],
+    ext: &[u8; EXT_BYTES],
     table: &CodeTable,
     at: CodeCursor,
     step4: u32,
 ) -> u32 {
-    let c0 = at.chip as usize;
-    let (wi, sh) = ((c0 >> 5) & 31, (c0 & 31) as u32);
-    let lo = ext[wi];
-    let hi = ext[wi + 1];
-    // Chips c0 … c0 + 31 (the byte windows need at most c0 + 17).
-    let window = (lo >> sh) | ((hi << 1) << (31 - sh));
+    let c0 = (at.chip as usize) & 1023;
+    // Chips c0 … c0 + 24 (the byte windows need at most c0 + 18): an unaligned word from the
+    // byte holding chip c0.
+    let bytes = match ext.get(c0 / 8..c0 / 8 + 4) {
+        Some(&[a, b, c, d]) => [a, b, c, d],
+        _ => [0; 4],
+    };
+    let window = u32::from_le_bytes(bytes) >> (c0 % 8);
     let mut anchor = at.frac >> 5;
     let mut word = 0u32;
     for g in 0..4 {

@@ -10,7 +10,7 @@
 
 use super::block::BitBlock;
 use super::carrier::{self, CarrierLevels, CarrierStep, CarrierWords};
-use super::code::{self, CodeCursor, CodeTable, EXT_WORDS, MIN_TABLE_SAMPLE_RATE_HZ};
+use super::code::{self, CodeCursor, CodeTable, EXT_BYTES, MIN_TABLE_SAMPLE_RATE_HZ};
 use super::kernel::{self, ChunkPlanes, StreamWords, CHUNK_WORDS, MAX_STREAMS};
 use super::planes::{PlaneFormat, WORD_SAMPLES};
 use crate::error::SignalError;
@@ -142,7 +142,7 @@ pub struct BitCorrelator<const A: usize> {
     noise_delay: usize,
     slave_taps: SlaveTaps,
     table_step: u64,
-    ext: [u32; EXT_WORDS],
+    ext: [u8; EXT_BYTES],
     /// Population counts per antenna, tap (E, P, L, N) and stream.
     acc: [[[u32; MAX_STREAMS]; 4]; A],
     /// Samples of the `c` streams' and of the `s` streams' support.
@@ -510,9 +510,13 @@ impl<const A: usize> BitCorrelator<A> {
         let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
         let step4 = (step >> 2) as u32;
         let work = &mut self.work;
-        for p in work.prompt.iter_mut().take(words) {
-            *p = code::prompt_word(&self.ext, table, at, step4);
+        // Two passes (the word starts, then the words) keep each loop's state in registers.
+        for c in work.cursors.iter_mut().take(words) {
+            *c = at;
             at.advance(chips, frac);
+        }
+        for (p, &c) in work.prompt.iter_mut().zip(work.cursors.iter()).take(words) {
+            *p = code::prompt_word(&self.ext, table, c, step4);
         }
         let base = back * WORD_SAMPLES;
         let offsets = [base + d, base, base - d, base - self.noise_delay];
@@ -548,6 +552,8 @@ struct Workspace {
     carrier: [CarrierWords; CHUNK_WORDS],
     /// The prompt string of the chunk and its margins.
     prompt: [u32; PROMPT_WORDS],
+    /// The code phase at the start of every prompt word.
+    cursors: [CodeCursor; PROMPT_WORDS],
     /// Code words per tap (E, P, L, N), masked with the `c ≠ 0` support (and the span).
     taps: [[u32; CHUNK_WORDS]; 4],
     /// The same masked with the `s ≠ 0` support (3-level carrier only).
@@ -566,6 +572,7 @@ impl Workspace {
                 nzs: 0,
             }; CHUNK_WORDS],
             prompt: [0; PROMPT_WORDS],
+            cursors: [CodeCursor { chip: 0, frac: 0 }; PROMPT_WORDS],
             taps: [[0; CHUNK_WORDS]; 4],
             taps_s: [[0; CHUNK_WORDS]; 4],
             streams: [[0; CHUNK_WORDS]; MAX_STREAMS],
@@ -622,6 +629,7 @@ fn antenna<const CX: bool, const TB: bool, const L3: bool>(
     let (n, [lead_mask, tail_mask]) = chunk;
     let n = n.min(CHUNK_WORDS);
     let j_count = kernel::stream_count(CX, TB, L3);
+
     let scratch = &mut work.streams;
     kernel::prepare::<CX, TB, L3>(p, work.carrier.get(..n).unwrap_or_default(), scratch);
     if !L3 {
@@ -647,19 +655,17 @@ fn antenna<const CX: bool, const TB: bool, const L3: bool>(
             continue;
         };
         let code_s = if L3 { code_s } else { code_c };
-        for (j, (stream, sum)) in scratch
-            .iter()
-            .zip(sums.iter_mut())
-            .take(j_count)
-            .enumerate()
-        {
+        let code = |j: usize| {
             let code = if kernel::stream_uses_s(CX, TB, L3, j) {
                 code_s
             } else {
                 code_c
             };
-            let x = stream.get(..n).unwrap_or_default();
-            *sum += kernel::xor_count(x, code.get(..n).unwrap_or_default());
+            code.get(..n).unwrap_or_default()
+        };
+        let x = |j: usize| scratch.get(j).and_then(|s| s.get(..n)).unwrap_or_default();
+        for (j, sum) in sums.iter_mut().enumerate().take(j_count) {
+            *sum += kernel::xor_count(x(j), code(j));
         }
     }
 }
