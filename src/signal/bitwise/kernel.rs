@@ -117,27 +117,37 @@ pub(crate) fn prepare<const CX: bool, const TB: bool, const L3: bool>(
     out: &mut StreamWords,
 ) {
     let j_count = stream_count(CX, TB, L3);
-    let words = carrier
+    let [o0, o1, o2, o3, o4, o5, o6, o7] = out;
+    let outs = o0
+        .iter_mut()
+        .zip(o1.iter_mut())
+        .zip(o2.iter_mut())
+        .zip(o3.iter_mut())
+        .zip(o4.iter_mut())
+        .zip(o5.iter_mut())
+        .zip(o6.iter_mut())
+        .zip(o7.iter_mut());
+    let inputs = carrier
         .iter()
         .zip(planes.a)
         .zip(planes.ma)
         .zip(planes.b)
-        .zip(planes.mb)
-        .enumerate();
-    for (w, ((((r, &a), &ma), &b), &mb)) in words {
+        .zip(planes.mb);
+    for (slots, inputs) in outs.zip(inputs) {
+        let (((((((w0, w1), w2), w3), w4), w5), w6), w7) = slots;
+        let ((((r, &a), &ma), &b), &mb) = inputs;
         let u = streams::<CX, TB, L3>(a, ma, b, mb, r);
-        for (j, (stream, &x)) in out.iter_mut().zip(u.iter()).take(j_count).enumerate() {
-            let m = if L3 {
-                if stream_uses_s(CX, TB, L3, j) {
+        let slots = [w0, w1, w2, w3, w4, w5, w6, w7];
+        for (j, (slot, x)) in slots.into_iter().zip(u).enumerate() {
+            if j < j_count {
+                let mask = if !L3 {
+                    u32::MAX
+                } else if stream_uses_s(CX, TB, L3, j) {
                     r.nzs
                 } else {
                     r.nzc
-                }
-            } else {
-                u32::MAX
-            };
-            if let Some(slot) = stream.get_mut(w) {
-                *slot = x & m;
+                };
+                *slot = x & mask;
             }
         }
     }
@@ -174,6 +184,26 @@ pub(crate) fn popcount(v: u32) -> u32 {
 /// 8 per word, 240 for 30 words), summed once at the end.
 #[inline(always)]
 pub(crate) fn xor_count(x: &[u32], t: &[u32]) -> u32 {
+    #[cfg(not(target_arch = "arm"))]
+    {
+        // Hosts: one plain loop that the vectorizer turns into SIMD population counts (the
+        // same integers: a population count is exact either way).
+        x.iter()
+            .zip(t)
+            .take(CHUNK_WORDS)
+            .map(|(a, b)| popcount(a ^ b))
+            .sum()
+    }
+    #[cfg(target_arch = "arm")]
+    {
+        xor_count_swar(x, t)
+    }
+}
+
+/// The Cortex-M path of [`xor_count`] (and the reference for the host path in tests).
+#[cfg_attr(not(target_arch = "arm"), allow(dead_code))]
+#[inline(always)]
+pub(crate) fn xor_count_swar(x: &[u32], t: &[u32]) -> u32 {
     let n = x.len().min(t.len()).min(CHUNK_WORDS);
     let (x, t) = (
         x.get(..n).unwrap_or_default(),
@@ -258,6 +288,7 @@ mod tests {
                 .map(|(a, b)| (a ^ b).count_ones())
                 .sum();
             assert_eq!(xor_count(&x[..n], &t[..n]), want);
+            assert_eq!(xor_count_swar(&x[..n], &t[..n]), want);
         }
         let ones = [u32::MAX; CHUNK_WORDS];
         assert_eq!(xor_count(&ones, &[0; CHUNK_WORDS]), 960);
