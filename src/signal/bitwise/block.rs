@@ -7,6 +7,7 @@ use super::planes::{AntennaPlanes, PlaneError, PlaneFormat};
 /// The planes of `A` antennas over the same `len` sample instants (one clock), starting at
 /// receiver sample `first_sample`, and the code table of the front end's sample rate.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BitBlock<'a, const A: usize> {
     first_sample: u64,
     len: usize,

@@ -49,6 +49,7 @@ pub enum CarrierLevels {
 
 /// The carrier words of one word of samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub(crate) struct CarrierWords {
     /// Bit set: `c < 0`.
     pub(crate) c: u32,
@@ -64,6 +65,7 @@ pub(crate) struct CarrierWords {
 
 /// The carrier step prepared for word generation.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub(crate) struct CarrierStep {
     /// The slow part, 2⁻³² cycle per sample, `|δ_s| ≤ 2²⁹`.
     slow: i32,
@@ -102,6 +104,7 @@ impl CarrierStep {
 
 /// The crossings of index boundaries (every `2^(32 − B)`) by an increasing ramp.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 struct Crossings {
     /// `|δ_s|`, at least 1.
     d: u32,

@@ -50,6 +50,7 @@ pub(crate) const EXT_BYTES: usize = 136;
 /// a front end. Entry `q·32 + chips` holds, in bit `i`, bit `o(q, i)` of `chips` (see the
 /// module documentation).
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CodeTable {
     step: u64,
     bytes: [u8; CODE_TABLE_LEN],
@@ -131,6 +132,7 @@ pub(crate) fn extended_code(prn: Prn) -> [u8; EXT_BYTES] {
 /// The code NCO's state at a word start, split for the word loop: chip index `chip`
 /// (`0 … 1022`) and fraction `frac` (2⁻³² chip).
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub(crate) struct CodeCursor {
     pub(crate) chip: u32,
     pub(crate) frac: u32,

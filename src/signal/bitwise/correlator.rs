@@ -129,6 +129,7 @@ impl BitCorrelatorConfig {
 
 /// The bit-parallel correlator of one satellite over `A` antennas.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BitCorrelator<const A: usize> {
     prn: Prn,
     sample_rate_hz: f64,
@@ -548,6 +549,7 @@ impl<const A: usize> BitCorrelator<A> {
 /// The chunk loop's scratch: the replica of one chunk, shared by the antennas, and the stream
 /// words of the antenna being correlated (2.8 KiB).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 struct Workspace {
     carrier: [CarrierWords; CHUNK_WORDS],
     /// The prompt string of the chunk and its margins.
@@ -667,5 +669,19 @@ fn antenna<const CX: bool, const TB: bool, const L3: bool>(
         for (j, sum) in sums.iter_mut().enumerate().take(j_count) {
             *sum += kernel::xor_count(x(j), code(j));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_is_as_documented() {
+        // The module documentation quotes these sizes.
+        assert_eq!(core::mem::size_of::<Workspace>(), 3324);
+        let size = core::mem::size_of::<BitCorrelator<3>>();
+        assert!((3900..4100).contains(&size), "{size}");
+        assert_eq!(core::mem::size_of::<CodeTable>(), 8192 + 8);
     }
 }

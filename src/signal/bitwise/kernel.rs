@@ -42,6 +42,7 @@ pub(crate) type StreamWords = [[u32; CHUNK_WORDS]; MAX_STREAMS];
 /// The planes of one antenna over a chunk (each as long as the chunk; a plane the format does
 /// not have is replaced by the sign plane and ignored).
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub(crate) struct ChunkPlanes<'a> {
     pub(crate) a: &'a [u32],
     pub(crate) ma: &'a [u32],
@@ -107,7 +108,7 @@ fn streams<const CX: bool, const TB: bool, const L3: bool>(
 }
 
 /// Fills `out` with the stream words of the chunk's words (`carrier.len()` of them, at most
-/// [`CHUNK_WORDS`]), each ANDed with its support mask when `MASK` (3-level carrier); the
+/// [`CHUNK_WORDS`]), each masked (AND) with its support mask for the 3-level carrier; the
 /// 2-level carrier's masks are all ones except at a span's edges, which the caller applies to
 /// the first and last word only.
 #[inline(always)]

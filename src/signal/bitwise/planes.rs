@@ -210,6 +210,7 @@ impl<'a> AntennaPlanes<'a> {
 
 /// Plane storage of one antenna for up to `32·W` samples (`16·W` bytes), filled by the packers.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PlaneBuffer<const W: usize> {
     planes: [[u32; W]; 4],
     len: usize,

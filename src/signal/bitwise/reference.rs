@@ -15,6 +15,7 @@ use crate::signal::nco::{CarrierNco, CodeNco, CODE_WRAP};
 /// The scalar reference correlator (same NCO interface as
 /// [`BitCorrelator`](super::BitCorrelator), public NCO state for tests).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ScalarReference<const A: usize> {
     prn: Prn,
     format: PlaneFormat,
