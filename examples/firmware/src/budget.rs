@@ -659,6 +659,24 @@ fn bitwise_budgets() {
             hprintln!("budget bitwise: {} did not complete one code period: {:?}", name, out.map(|o| o.map(|e| e.samples)));
         }
     }
+    // LEO Doppler: the carrier words then hold up to two quadrant crossings each.
+    let format = PlaneFormat { resolution: Resolution::OneBit, complex: true };
+    if let (Ok(p0), Ok(p1), Ok(p2), Ok(mut corr)) = (
+        pack_self_test(format, &s[0], &s[3]),
+        pack_self_test(format, &s[1], &s[4]),
+        pack_self_test(format, &s[2], &s[5]),
+        self_test_correlator(format, CarrierLevels::Two),
+    ) {
+        if let (Ok(block), Ok(())) = (
+            BitBlock::new(0, &CODE_TABLE_2M6, [p0.planes(), p1.planes(), p2.planes()]),
+            corr.set_carrier_frequency(40_000.0),
+        ) {
+            let _ = measure("bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier at 40 kHz Doppler, E/P/L+N ref + P slaves", || {
+                let mut cursor = 0;
+                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+            });
+        }
+    }
 }
 
 /// Packing 1 ms (2600 sample instants) of front-end bytes of 3 antennas into bit planes: the
