@@ -26,8 +26,8 @@
 //! bit-sliced 2-bit add: four operations), give the planes of `φ`. The slow ramp's index
 //! changes by one at each crossing of an index boundary; in a word there are at most
 //! `T = 1 + ⌊30/h⌋` of them, `h = ⌊U/|δ_s|⌋`, `U` the index unit (2³⁰ or 2²⁹): one for a
-//! Doppler below `f_s/128` from a multiple of `f_s/4` (±20 kHz at 2.6 Msps, 2-level), two below
-//! `f_s/64`. The first crossing is `k₁ = ⌈(U − (ψ₀ mod U))/δ_s⌉` (one division), each next one
+//! carrier within `f_s/124` of a multiple of `f_s/4` (±21 kHz at 2.6 Msps, 2-level; half that
+//! for the 3-level octants), two within `f_s/60` (±43 kHz). The first crossing is `k₁ = ⌈(U − (ψ₀ mod U))/δ_s⌉` (one division), each next one
 //! `h` or `h + 1` later (decided exactly by the remainder), and the index planes are the start
 //! index's bits XOR the masks `bits ≥ k_j` of the crossings that flip them. A negative slow
 //! step runs the same computation backwards from the word's last sample and reverses the bits.

@@ -408,8 +408,8 @@ impl<const A: usize> BitCorrelator<A> {
     fn correlate_span(&mut self, block: &BitBlock<'_, A>, start: usize, n: usize) {
         let end = start + n;
         let mut s = start;
-        // Bounded: every pass ends at least one word further (at most 2 049 passes for the
-        // largest epoch).
+        // Bounded: every pass but the last covers a whole chunk (at most 70 passes for the
+        // largest epoch of 65 536 samples).
         while s < end {
             let w0 = s / WORD_SAMPLES;
             let w1 = ((end - 1) / WORD_SAMPLES + 1).min(w0 + CHUNK_WORDS);

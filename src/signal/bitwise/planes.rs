@@ -99,7 +99,7 @@ impl PlaneFormat {
         matches!(self.resolution, Resolution::TwoBit)
     }
 
-    /// Bytes of a word of each plane-set (for documentation of the storage cost): 4 per plane.
+    /// Planes per antenna (1 to 4; each costs 4 bytes per 32 samples).
     pub const fn planes(self) -> usize {
         (1 + self.two_bit() as usize) * (1 + self.complex as usize)
     }

@@ -106,18 +106,19 @@ impl<const A: usize> ScalarReference<A> {
         for p in start..start + n {
             self.sample(block, start, p);
         }
-        self.code.phase += n as u64 * self.code.step;
+        let advance = (n as u64).wrapping_mul(self.code.step);
+        self.code.phase = self.code.phase.wrapping_add(advance);
         let adv = self.carrier.step.wrapping_mul(n as u32);
         self.carrier.phase = self.carrier.phase.wrapping_add(adv);
         self.carrier_total = self
             .carrier_total
             .wrapping_add(i64::from(self.carrier.step as i32) * n as i64);
-        self.samples += n as u32;
+        self.samples = self.samples.saturating_add(n as u32);
         *cursor = start + n;
         if (n as u64) < to_wrap {
             return Ok(None);
         }
-        self.code.phase -= CODE_WRAP;
+        self.code.phase = self.code.phase.wrapping_sub(CODE_WRAP);
         let (first_sample, code_phase_at_first, carrier_phase_at_first) =
             self.first.unwrap_or_default();
         let mut taps = [Taps::default(); A];
