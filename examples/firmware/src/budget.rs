@@ -26,7 +26,9 @@ use gnss_attitude::geometry::Paper003Angles;
 use gnss_attitude::signal::selftest::{
     run_correlator_self_test, signal_self_test_samples, SIGNAL_SELF_TEST_LEN, SIGNAL_SELF_TEST_RATE_HZ,
 };
-use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, Taps};
+use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
+use gnss_attitude::signal::bitwise::selftest::{pack_self_test, self_test_correlator, BIT_SELF_TEST_WORDS};
+use gnss_attitude::signal::bitwise::{BitBlock, CarrierLevels, CodeTable, PlaneBuffer, PlaneFormat, Resolution};
 use gnss_attitude::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, LockFlags, SearchResult, TrackingEpoch,
 };
@@ -42,6 +44,10 @@ pub static SIGNAL_SAMPLES: [[i8; SIGNAL_SELF_TEST_LEN]; 6] = [
     signal_self_test_samples(5),
     signal_self_test_samples(6),
 ];
+
+/// The bit-parallel correlator's code expansion table for 2.6 Msps (8 KiB), built at compile
+/// time into flash: the nominal code step `round(1.023e6 / 2.6e6 · 2³²)`.
+pub static CODE_TABLE_2M6: CodeTable = CodeTable::from_step((1.023e6 / 2.6e6 * 4_294_967_296.0 + 0.5) as u64);
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -492,6 +498,8 @@ fn signal_budgets() {
             });
         }
     }
+    bitwise_budgets();
+    packing_budgets();
     // One tracking epoch: correlator + discriminators + loop filters + lock/C/N0 windows.
     let ch_cfg = ChannelConfig::new(SIGNAL_SELF_TEST_RATE_HZ, 0.0);
     if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::complex(0, i, q)) {
@@ -605,3 +613,132 @@ fn receiver_budgets() {
     let att = r.attitude();
     hprintln!("receiver: source {:?}, error {} deg", att.source, att.q_rb.angle_to(&flight.attitude(att.epoch)) * 57.29578);
 }
+
+/// The bit-parallel correlator on the i8 correlator's case (3 antennas x 1 satellite, one 1 ms
+/// code period at 2.6 Msps, E/P/L+N on the reference antenna, prompt on the slaves), planes
+/// packed from the same samples before the region: 1- and 2-bit, complex and real IF, 2- and
+/// 3-level carrier.
+fn bitwise_budgets() {
+    let s = &SIGNAL_SAMPLES;
+    let cases = [
+        (Resolution::OneBit, true, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, true, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 2-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::OneBit, true, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, true, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 2-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::OneBit, false, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 1-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, false, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 2-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::OneBit, false, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 1-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, false, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 2-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+    ];
+    for (resolution, complex, levels, name) in cases {
+        let format = PlaneFormat { resolution, complex };
+        let q = |k: usize| if complex { &s[3 + k][..] } else { &[][..] };
+        let (Ok(p0), Ok(p1), Ok(p2)) = (
+            pack_self_test(format, &s[0], q(0)),
+            pack_self_test(format, &s[1], q(1)),
+            pack_self_test(format, &s[2], q(2)),
+        ) else {
+            hprintln!("budget bitwise: packing failed");
+            continue;
+        };
+        let Ok(block) = BitBlock::new(0, &CODE_TABLE_2M6, [p0.planes(), p1.planes(), p2.planes()]) else {
+            hprintln!("budget bitwise: block refused");
+            continue;
+        };
+        let Ok(mut corr) = self_test_correlator(format, levels) else {
+            hprintln!("budget bitwise: correlator refused");
+            continue;
+        };
+        let out = measure(name, || {
+            let mut cursor = 0;
+            black_box(&mut corr).run(black_box(&block), &mut cursor)
+        });
+        if !matches!(out, Ok(Some(ref e)) if e.samples == 2600) {
+            hprintln!("budget bitwise: {} did not complete one code period: {:?}", name, out.map(|o| o.map(|e| e.samples)));
+        }
+    }
+    // LEO Doppler: the carrier words then hold up to two quadrant crossings each.
+    let format = PlaneFormat { resolution: Resolution::OneBit, complex: true };
+    if let (Ok(p0), Ok(p1), Ok(p2), Ok(mut corr)) = (
+        pack_self_test(format, &s[0], &s[3]),
+        pack_self_test(format, &s[1], &s[4]),
+        pack_self_test(format, &s[2], &s[5]),
+        self_test_correlator(format, CarrierLevels::Two),
+    ) {
+        if let (Ok(block), Ok(())) = (
+            BitBlock::new(0, &CODE_TABLE_2M6, [p0.planes(), p1.planes(), p2.planes()]),
+            corr.set_carrier_frequency(40_000.0),
+        ) {
+            let _ = measure("bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier at 40 kHz Doppler, E/P/L+N ref + P slaves", || {
+                let mut cursor = 0;
+                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+            });
+        }
+    }
+}
+
+/// Packing 1 ms (2600 sample instants) of front-end bytes of 3 antennas into bit planes: the
+/// DMA layouts a flight receiver hands over (sm2iq: two complex samples a byte per antenna;
+/// mc2x3: one byte per instant holding the three antennas' 2-bit real samples; bit1: eight
+/// real samples a byte per antenna).
+fn packing_budgets() {
+    let s = &SIGNAL_SAMPLES;
+    let field = |x: i8| (u8::from(x < 0) << 1) | u8::from(x.unsigned_abs() >= 18);
+    let mut sm2iq = [[0u8; 1300]; 3];
+    for (a, bytes) in sm2iq.iter_mut().enumerate() {
+        for (k, b) in bytes.iter_mut().enumerate() {
+            let (i0, q0, i1, q1) = (s[a][2 * k], s[a + 3][2 * k], s[a][2 * k + 1], s[a + 3][2 * k + 1]);
+            *b = (field(i0) << 6) | (field(q0) << 4) | (field(i1) << 2) | field(q1);
+        }
+    }
+    let mut mc2 = [0u8; 2600];
+    for (k, b) in mc2.iter_mut().enumerate() {
+        *b = field(s[0][k]) | (field(s[1][k]) << 2) | (field(s[2][k]) << 4);
+    }
+    let mut bit1 = [[0u8; 325]; 3];
+    for (a, bytes) in bit1.iter_mut().enumerate() {
+        for (k, b) in bytes.iter_mut().enumerate() {
+            for j in 0..8 {
+                *b |= u8::from(s[a][8 * k + j] < 0) << (7 - j);
+            }
+        }
+    }
+    let two_cx = PlaneFormat { resolution: Resolution::TwoBit, complex: true };
+    let one_cx = PlaneFormat { resolution: Resolution::OneBit, complex: true };
+    let two_re = PlaneFormat { resolution: Resolution::TwoBit, complex: false };
+    let one_re = PlaneFormat { resolution: Resolution::OneBit, complex: false };
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(two_cx), PlaneBuffer::new(two_cx), PlaneBuffer::new(two_cx)];
+    let n = measure("packing 1 ms sm2iq -> 2-bit complex planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&sm2iq)) {
+            n += b.pack_bytes(SampleFormat::SignMagnitude2 { complex: true }, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(one_cx), PlaneBuffer::new(one_cx), PlaneBuffer::new(one_cx)];
+    let n1 = measure("packing 1 ms sm2iq -> 1-bit complex planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&sm2iq)) {
+            n += b.pack_bytes(SampleFormat::SignMagnitude2 { complex: true }, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(two_re), PlaneBuffer::new(two_re), PlaneBuffer::new(two_re)];
+    let n2 = measure("packing 1 ms mc2x3 -> 2-bit real planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (c, b) in black_box(&mut bufs).iter_mut().enumerate() {
+            n += b.pack_bytes(SampleFormat::MultiChannel2 { channels: 3 }, black_box(&mc2[..]), c).unwrap_or(0);
+        }
+        n
+    });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(one_re), PlaneBuffer::new(one_re), PlaneBuffer::new(one_re)];
+    let n3 = measure("packing 1 ms bit1 -> 1-bit real planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&bit1)) {
+            n += b.pack_bytes(SampleFormat::Sign1, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
+    hprintln!("budget packing: samples packed {} {} {} {}", n, n1, n2, n3);
+}
+
