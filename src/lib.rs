@@ -79,6 +79,7 @@ pub mod error;
 pub mod frontend;
 pub mod geometry;
 pub mod gyro;
+pub mod nav;
 pub mod noise;
 pub mod receiver;
 pub mod selftest;
