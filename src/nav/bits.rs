@@ -301,7 +301,11 @@ mod tests {
         assert_eq!(edge, Some(((1000 + 7) % 20) as u8));
         assert!(bits.len() > 240, "{}", bits.len());
         let first = bits[0];
-        assert!(first.start_epoch < 1000 + 1200, "sync at {}", first.start_epoch);
+        assert!(
+            first.start_epoch < 1000 + 1200,
+            "sync at {}",
+            first.start_epoch
+        );
         for b in &bits {
             let t = truth.iter().find(|t| t.0 == b.start_epoch).unwrap();
             assert_eq!(b.value, t.1, "bit at {}", b.start_epoch);

@@ -123,7 +123,11 @@ impl ChannelDecoder {
     /// # Errors
     /// [`DecodeError::Bit`] (a gap restarts the subframe search), [`DecodeError::Subframe`]
     /// (a parity failure, counted).
-    pub fn push_prompt(&mut self, epoch: u64, prompt_i: f32) -> Result<Option<Subframe>, DecodeError> {
+    pub fn push_prompt(
+        &mut self,
+        epoch: u64,
+        prompt_i: f32,
+    ) -> Result<Option<Subframe>, DecodeError> {
         let bit = match self.bits.push(epoch, prompt_i) {
             Ok(Some(bit)) => bit,
             Ok(None) => return Ok(None),
@@ -186,7 +190,11 @@ impl ChannelDecoder {
     /// # Errors
     /// [`AnchorError::NoAnchor`] before the first subframe or while the week is unknown,
     /// [`AnchorError::BeforeAnchor`], [`AnchorError::Transmit`].
-    pub fn transmit_time(&self, epoch: u64, code_phase_chips: f32) -> Result<TransmitTime, AnchorError> {
+    pub fn transmit_time(
+        &self,
+        epoch: u64,
+        code_phase_chips: f32,
+    ) -> Result<TransmitTime, AnchorError> {
         let anchor = self.anchor.ok_or(AnchorError::NoAnchor)?;
         let week = anchor.week.ok_or(AnchorError::NoAnchor)?;
         let periods = epoch

@@ -248,9 +248,27 @@ impl Ephemeris {
     /// The first limit it violates, as an [`EphemerisError`].
     pub fn check(&self, limits: &PlausibilityLimits) -> Result<(), EphemerisError> {
         let fields = [
-            self.toe_s, self.toc_s, self.sqrt_a, self.e, self.i0, self.omega0, self.omega,
-            self.m0, self.delta_n, self.idot, self.omega_dot, self.cuc, self.cus, self.crc,
-            self.crs, self.cic, self.cis, self.af0, self.af1, self.af2, self.tgd,
+            self.toe_s,
+            self.toc_s,
+            self.sqrt_a,
+            self.e,
+            self.i0,
+            self.omega0,
+            self.omega,
+            self.m0,
+            self.delta_n,
+            self.idot,
+            self.omega_dot,
+            self.cuc,
+            self.cus,
+            self.crc,
+            self.crs,
+            self.cic,
+            self.cis,
+            self.af0,
+            self.af1,
+            self.af2,
+            self.tgd,
         ];
         if fields.iter().any(|v| !v.is_finite()) {
             return Err(EphemerisError::NonFinite);

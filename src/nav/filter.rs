@@ -324,7 +324,8 @@ pub fn acceleration(r: &[f64; 3], v: &[f64; 3]) -> [f64; 3] {
 
 /// One RK4 step of `h` seconds.
 fn rk4(r: &[f64; 3], v: &[f64; 3], h: f64) -> ([f64; 3], [f64; 3]) {
-    let add = |a: &[f64; 3], b: &[f64; 3], s: f64| [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]];
+    let add =
+        |a: &[f64; 3], b: &[f64; 3], s: f64| [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]];
     let k1v = acceleration(r, v);
     let k1r = *v;
     let r2 = add(r, &k1r, h / 2.0);

@@ -65,8 +65,14 @@ impl Geodetic {
 
     /// `C_ne`: ECEF components to local north-east-down components.
     pub fn ecef_to_ned(&self) -> Matrix3<f32> {
-        let (sl, cl) = (libm::sinf(self.lat_rad as f32), libm::cosf(self.lat_rad as f32));
-        let (so, co) = (libm::sinf(self.lon_rad as f32), libm::cosf(self.lon_rad as f32));
+        let (sl, cl) = (
+            libm::sinf(self.lat_rad as f32),
+            libm::cosf(self.lat_rad as f32),
+        );
+        let (so, co) = (
+            libm::sinf(self.lon_rad as f32),
+            libm::cosf(self.lon_rad as f32),
+        );
         Matrix3::new(
             -sl * co,
             -sl * so,

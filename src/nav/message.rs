@@ -36,7 +36,11 @@ fn field(words: &[u32; 10], word: usize, first: u32, len: u32) -> u32 {
         .copied()
         .unwrap_or(0);
     let shift = 24u32.saturating_sub(first.saturating_add(len).saturating_sub(1));
-    let mask = if len >= 32 { u32::MAX } else { (1u32 << len) - 1 };
+    let mask = if len >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << len) - 1
+    };
     (value >> shift.min(31)) & mask
 }
 
@@ -254,7 +258,10 @@ pub fn decode(subframe: &Subframe) -> NavMessage {
             let data_id = field(w, 3, 1, 2);
             let sv_id = field(w, 3, 3, 6) as u8;
             if data_id != 0b01 {
-                return NavMessage::Other { subframe: id, sv_id };
+                return NavMessage::Other {
+                    subframe: id,
+                    sv_id,
+                };
             }
             match (id, sv_id) {
                 (_, 1..=32) => NavMessage::Almanac(decode_almanac(w, sv_id)),
@@ -265,7 +272,10 @@ pub fn decode(subframe: &Subframe) -> NavMessage {
                     let (iono, utc) = decode_iono_utc(w);
                     NavMessage::IonosphereUtc(iono, utc)
                 }
-                _ => NavMessage::Other { subframe: id, sv_id },
+                _ => NavMessage::Other {
+                    subframe: id,
+                    sv_id,
+                },
             }
         }
     }

@@ -170,9 +170,7 @@ mod tests {
             d(1) ^ d(3) ^ d(5) ^ d(6) ^ d(7),
             d(3) ^ d(5) ^ d(6) ^ d(8),
         ];
-        let expected = by_hand
-            .iter()
-            .fold(0u8, |acc, &b| (acc << 1) | u8::from(b));
+        let expected = by_hand.iter().fold(0u8, |acc, &b| (acc << 1) | u8::from(b));
         assert_eq!(parity_bits(tlm, false, false), expected);
         assert_eq!(expected, 0b01_0010);
     }

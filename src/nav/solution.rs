@@ -314,12 +314,22 @@ pub fn solve<S: EphemerisSource + ?Sized>(
     }
     let mut excluded_prn = None;
     if let Some(confidence) = config.raim {
-        if let Some((prn, better)) = residual_check(&mut sats, &ls, config, &atmosphere, confidence)? {
+        if let Some((prn, better)) =
+            residual_check(&mut sats, &ls, config, &atmosphere, confidence)?
+        {
             excluded_prn = Some(prn);
             ls = better;
         }
     }
-    finish(&sats, &ls, receive, excluded_prn, skipped, config, &atmosphere)
+    finish(
+        &sats,
+        &ls,
+        receive,
+        excluded_prn,
+        skipped,
+        config,
+        &atmosphere,
+    )
 }
 
 /// Satellite states at their times of transmission.
@@ -378,7 +388,14 @@ impl Atmosphere<'_> {
         let (el, az) = elevation_azimuth(u_ned);
         let mut d = 0.0;
         if let Some(p) = self.iono {
-            d += klobuchar_delay_m(p, g.lat_rad as f32, g.lon_rad as f32, el.max(0.0), az, self.tow_s);
+            d += klobuchar_delay_m(
+                p,
+                g.lat_rad as f32,
+                g.lon_rad as f32,
+                el.max(0.0),
+                az,
+                self.tow_s,
+            );
         }
         if self.troposphere {
             d += troposphere_delay_m(g.height_m as f32, el.max(0.0));
@@ -393,7 +410,11 @@ const MIN_POSITION_RADIUS_M: f64 = 6.0e6;
 
 /// The geometry row of satellite `s` at the estimate `x` (position, clock bias).
 fn row(s: &Prepared, x: &[f64; 4], at: &Option<Geodetic>, atm: &Atmosphere) -> Row {
-    let d0 = [s.position[0] - x[0], s.position[1] - x[1], s.position[2] - x[2]];
+    let d0 = [
+        s.position[0] - x[0],
+        s.position[1] - x[1],
+        s.position[2] - x[2],
+    ];
     let range0 = libm::sqrt(d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]);
     // Earth rotation during the flight τ: the satellite in the frame of the reception
     let theta = OMEGA_EARTH * range0 / SPEED_OF_LIGHT;
@@ -410,7 +431,11 @@ fn row(s: &Prepared, x: &[f64; 4], at: &Option<Geodetic>, atm: &Atmosphere) -> R
     );
     let d = [p[0] - x[0], p[1] - x[1], p[2] - x[2]];
     let range = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    let u = Vector3::new((d[0] / range) as f32, (d[1] / range) as f32, (d[2] / range) as f32);
+    let u = Vector3::new(
+        (d[0] / range) as f32,
+        (d[1] / range) as f32,
+        (d[2] / range) as f32,
+    );
     let (u_ned, elevation) = match at {
         Some(g) => {
             let n = g.ecef_to_ned() * u;
@@ -542,7 +567,11 @@ fn residual_check(
         set_used(sats, k, true);
         let Ok(c) = candidate else { continue };
         let passes = chi_square_threshold(c.used, confidence).is_some_and(|t| c.chi_square <= t);
-        if passes && best.as_ref().is_none_or(|(_, b)| c.chi_square < b.chi_square) {
+        if passes
+            && best
+                .as_ref()
+                .is_none_or(|(_, b)| c.chi_square < b.chi_square)
+        {
             best = Some((k, c));
         }
     }
@@ -580,7 +609,12 @@ fn finish(
         }
     }
     let n = f32::from(ls.used.max(1));
-    let weight_mean = sats.iter().filter(|s| s.used).map(|s| s.weight).sum::<f32>() / n;
+    let weight_mean = sats
+        .iter()
+        .filter(|s| s.used)
+        .map(|s| s.weight)
+        .sum::<f32>()
+        / n;
     let residual_rms_m = libm::sqrtf(ls.chi_square / n / weight_mean.max(f32::MIN_POSITIVE));
     Ok(Fix {
         time: receive.add_seconds(-ls.x[3] / SPEED_OF_LIGHT)?,
@@ -644,9 +678,15 @@ fn velocity(
     let mut gradient = Vector4::<f32>::zeros();
     let mut count = 0;
     for s in sats.iter().filter(|s| s.used) {
-        let Some(rate) = s.range_rate_m_s else { continue };
+        let Some(rate) = s.range_rate_m_s else {
+            continue;
+        };
         let r = row(s, x, at, atm);
-        let vs = Vector3::new(r.velocity.x as f32, r.velocity.y as f32, r.velocity.z as f32);
+        let vs = Vector3::new(
+            r.velocity.x as f32,
+            r.velocity.y as f32,
+            r.velocity.z as f32,
+        );
         // −λ f_D = uᵀ(v_s − v) + ḃ − c Δṫ_sv  ⇒  y = −λ f_D − uᵀ v_s + c Δṫ_sv = [−uᵀ, 1]·[v, ḃ]
         let y = rate - r.u.dot(&vs) + s.clock_rate_m_s as f32;
         let h = Vector4::new(-r.u.x, -r.u.y, -r.u.z, 1.0);

@@ -10,8 +10,8 @@
 
 use super::ephemeris::{Ephemeris, EphemerisError, PlausibilityLimits};
 use super::message::{
-    decode, AlmanacData, AlmanacReference, ClockData, KlobucharParameters, NavMessage,
-    OrbitData2, OrbitData3, UtcParameters,
+    decode, AlmanacData, AlmanacReference, ClockData, KlobucharParameters, NavMessage, OrbitData2,
+    OrbitData3, UtcParameters,
 };
 use super::subframe::{Subframe, SubframeError};
 use super::time::{resolve_week, wrap_half_week};
@@ -156,7 +156,11 @@ impl NavigationStore {
     /// # Errors
     /// [`StoreError::InvalidPrn`]; [`StoreError::Implausible`] when the subframe completed a
     /// consistent set that fails the plausibility checks.
-    pub fn add_subframe(&mut self, prn: u8, subframe: &Subframe) -> Result<StoreUpdate, StoreError> {
+    pub fn add_subframe(
+        &mut self,
+        prn: u8,
+        subframe: &Subframe,
+    ) -> Result<StoreUpdate, StoreError> {
         let index = usize::from(prn)
             .checked_sub(1)
             .filter(|&i| i < GPS_PRNS)

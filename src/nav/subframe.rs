@@ -219,8 +219,15 @@ impl SubframeSync {
         for (w, out) in words.iter_mut().enumerate() {
             let raw = self.window_bits(30 * w as i64, 30);
             let number = w as u8 + 1;
-            *out = decode_word(raw, d29, d30)
-                .map_err(|source| (number, SubframeError::Parity { word: number, source }))?;
+            *out = decode_word(raw, d29, d30).map_err(|source| {
+                (
+                    number,
+                    SubframeError::Parity {
+                        word: number,
+                        source,
+                    },
+                )
+            })?;
             d29 = raw & 0b10 != 0;
             d30 = raw & 1 != 0;
         }
@@ -277,7 +284,12 @@ mod tests {
         w
     }
 
-    fn feed(sync: &mut SubframeSync, bits: &[bool], first_epoch: u64, invert: bool) -> Vec<Result<Option<Subframe>, SubframeError>> {
+    fn feed(
+        sync: &mut SubframeSync,
+        bits: &[bool],
+        first_epoch: u64,
+        invert: bool,
+    ) -> Vec<Result<Option<Subframe>, SubframeError>> {
         bits.iter()
             .enumerate()
             .map(|(k, &b)| {
@@ -335,7 +347,10 @@ mod tests {
         let errors: Vec<_> = results.iter().filter_map(|r| r.err()).collect();
         assert_eq!(errors.len(), 1);
         assert!(matches!(errors[0], SubframeError::Parity { word: 5, .. }));
-        assert_eq!(results.iter().filter(|r| matches!(r, Ok(Some(_)))).count(), 2);
+        assert_eq!(
+            results.iter().filter(|r| matches!(r, Ok(Some(_)))).count(),
+            2
+        );
     }
 
     #[test]
