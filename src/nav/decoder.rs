@@ -145,7 +145,7 @@ impl ChannelDecoder {
             }
             Ok(None) => Ok(None),
             Err(e) => {
-                if matches!(e, SubframeError::Parity { .. }) {
+                if matches!(e, SubframeError::Parity { .. } | SubframeError::Preamble) {
                     self.parity_failures = self.parity_failures.saturating_add(1);
                 }
                 Err(e.into())

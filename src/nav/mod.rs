@@ -36,6 +36,7 @@
 //! | [`los`] | Lines of sight and their rates in the attitude's reference frame |
 //! | [`geodesy`] | WGS-84 ECEF ↔ geodetic, NED, elevation and azimuth |
 //! | [`time`] | GPS week and time of week |
+//! | [`example`] | A deterministic constellation, its subframes and observations (budgets, tests) |
 //!
 //! # Precision (f32 where it holds, f64 where it cannot)
 //!
@@ -61,6 +62,7 @@ pub mod atmosphere;
 pub mod bits;
 pub mod decoder;
 pub mod ephemeris;
+pub mod example;
 pub mod filter;
 pub mod geodesy;
 pub mod los;

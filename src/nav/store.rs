@@ -45,7 +45,8 @@ impl Default for StoreConfig {
 pub struct StoreCounters {
     /// Subframes accepted.
     pub subframes: u32,
-    /// Subframes refused by their parity ([`NavigationStore::record_decode_error`]).
+    /// Subframes refused by their parity or a missing preamble at the expected start
+    /// ([`NavigationStore::record_decode_error`]).
     pub parity_failures: u32,
     /// Consistent ephemeris sets refused as implausible.
     pub implausible: u32,
@@ -244,10 +245,13 @@ impl NavigationStore {
         })
     }
 
-    /// Counts a subframe refused by the synchronizer (a parity failure); other errors are
-    /// not counted.
+    /// Counts a subframe refused by the synchronizer (a parity failure, or no preamble where
+    /// the next subframe had to start); other errors are not counted.
     pub fn record_decode_error(&mut self, error: &SubframeError) {
-        if matches!(error, SubframeError::Parity { .. }) {
+        if matches!(
+            error,
+            SubframeError::Parity { .. } | SubframeError::Preamble
+        ) {
             self.counters.parity_failures = self.counters.parity_failures.saturating_add(1);
         }
     }

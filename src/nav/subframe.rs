@@ -2,13 +2,17 @@
 //! of all ten words (IS-GPS-200 20.3.5), then the HOW (time of week, subframe id).
 //!
 //! The synchronizer keeps the last 302 bits (a subframe and the two bits before it, `D29*`,
-//! `D30*` of the previous word 10) in a 320-bit shift register. At every bit whose window
-//! starts with the preamble or its complement, it checks the parity of the ten words (each
-//! with `D29*`, `D30*` of the word before it, as received, so both polarities decode to the
-//! same data). A window whose TLM and HOW pass but a later word fails, or that fails where the
-//! previous subframe said the next one must start, is a [`SubframeError::Parity`]: a real
-//! subframe with bit errors, counted by the caller. A window whose TLM or HOW fail elsewhere
-//! is just data that happens to look like a preamble.
+//! `D30*` of the previous word 10) in a 320-bit shift register.
+//!
+//! * **Searching**: at every bit whose window starts with the preamble or its complement, it
+//!   checks the parity of the ten words (each with `D29*`, `D30*` of the word before it, as
+//!   received, so both polarities decode to the same data) and the HOW's subframe id. A window
+//!   that fails is data that happens to look like a preamble (runs of zeros pass the parity at
+//!   any alignment, so a failure while searching says nothing) and is not reported.
+//! * **Synchronized** (after a decoded subframe): only the window 300 bits later is decoded,
+//!   whatever its bits; a failure there is a real subframe refused
+//!   ([`SubframeError::Parity`], [`SubframeError::Preamble`]), reported for the caller to
+//!   count, and the synchronizer goes back to searching.
 
 use super::bits::{DataBit, EPOCHS_PER_BIT};
 use super::parity::{decode_word, ParityError};
@@ -26,8 +30,8 @@ const WINDOW_BITS: u16 = 302;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum SubframeError {
-    /// A subframe (its TLM and HOW valid, or at the expected boundary) has a word whose
-    /// parity fails; the subframe is dropped.
+    /// The subframe at the expected boundary has a word whose parity fails; the subframe is
+    /// dropped.
     #[error("word {word} failed its parity check")]
     Parity {
         /// The failing word, 1–10.
@@ -36,6 +40,10 @@ pub enum SubframeError {
         #[source]
         source: ParityError,
     },
+    /// The words at the expected subframe start passed their parity but the first is not
+    /// the preamble (the bit stream slipped).
+    #[error("no preamble at the expected subframe start")]
+    Preamble,
     /// The HOW passed its parity but names no LNAV subframe (id outside 1–5).
     #[error("subframe id {id} is not 1-5")]
     InvalidId {
@@ -137,8 +145,9 @@ impl SubframeSync {
     /// window.
     ///
     /// # Errors
-    /// [`SubframeError::Parity`], [`SubframeError::InvalidId`] as described in the module
-    /// docs; the bits stay held.
+    /// At the expected boundary of a synchronized stream: [`SubframeError::Parity`],
+    /// [`SubframeError::Preamble`], [`SubframeError::InvalidId`]; the synchronizer returns
+    /// to searching, the bits stay held.
     pub fn push(&mut self, bit: &DataBit) -> Result<Option<Subframe>, SubframeError> {
         let follows = self
             .last_start
@@ -159,22 +168,31 @@ impl SubframeSync {
         else {
             return Ok(None);
         };
+        if let Some(expected) = self.expected_start {
+            // synchronized: only the expected boundary counts, whatever its bits say
+            if start_epoch != expected {
+                return Ok(None);
+            }
+            return match self.decode_window(start_epoch) {
+                Ok(subframe) => {
+                    self.expected_start = Some(next_start(start_epoch));
+                    Ok(Some(subframe))
+                }
+                Err(err) => {
+                    self.expected_start = None;
+                    Err(err)
+                }
+            };
+        }
+        // searching: a window that starts with the preamble in either polarity and decodes
         let raw_preamble = self.window_bits(0, 8);
         if raw_preamble != PREAMBLE && raw_preamble != (!PREAMBLE & 0xFF) {
             return Ok(None);
         }
-        let expected = self.expected_start == Some(start_epoch);
         match self.decode_window(start_epoch) {
             Ok(subframe) => {
-                self.expected_start =
-                    Some(start_epoch.saturating_add(SUBFRAME_BITS * EPOCHS_PER_BIT));
+                self.expected_start = Some(next_start(start_epoch));
                 Ok(Some(subframe))
-            }
-            Err((word, err)) if word > 2 || expected => {
-                if expected {
-                    self.expected_start = None;
-                }
-                Err(err)
             }
             Err(_) => Ok(None),
         }
@@ -210,8 +228,8 @@ impl SubframeSync {
         out
     }
 
-    /// Decodes the ten words; on failure, the failing word (1-based) and the error.
-    fn decode_window(&self, start_epoch: u64) -> Result<Subframe, (u8, SubframeError)> {
+    /// Decodes the ten words.
+    fn decode_window(&self, start_epoch: u64) -> Result<Subframe, SubframeError> {
         let mut words = [0u32; 10];
         let stars = self.window_bits(-2, 2);
         let inverted = stars & 1 == 1;
@@ -219,20 +237,15 @@ impl SubframeSync {
         for (w, out) in words.iter_mut().enumerate() {
             let raw = self.window_bits(30 * w as i64, 30);
             let number = w as u8 + 1;
-            *out = decode_word(raw, d29, d30).map_err(|source| {
-                (
-                    number,
-                    SubframeError::Parity {
-                        word: number,
-                        source,
-                    },
-                )
+            *out = decode_word(raw, d29, d30).map_err(|source| SubframeError::Parity {
+                word: number,
+                source,
             })?;
             d29 = raw & 0b10 != 0;
             d30 = raw & 1 != 0;
         }
         if words[0] >> 16 != PREAMBLE {
-            return Err((1, SubframeError::InvalidId { id: 0 }));
+            return Err(SubframeError::Preamble);
         }
         let subframe = Subframe {
             words,
@@ -241,7 +254,7 @@ impl SubframeSync {
         };
         let id = subframe.id();
         if !(1..=5).contains(&id) {
-            return Err((2, SubframeError::InvalidId { id }));
+            return Err(SubframeError::InvalidId { id });
         }
         Ok(subframe)
     }
@@ -362,4 +375,9 @@ mod tests {
         };
         assert_eq!(s.start_tow_s(), 604_794);
     }
+}
+
+/// The start epoch of the subframe after the one starting at `start`.
+fn next_start(start: u64) -> u64 {
+    start.saturating_add(SUBFRAME_BITS * EPOCHS_PER_BIT)
 }

@@ -922,3 +922,59 @@ fn the_store_keeps_the_newest_consistent_plausible_set_and_counts_refusals() {
     });
     assert_eq!(store.counters().parity_failures, 1);
 }
+
+// ---- the deterministic example (the firmware's budgets) ------------------------------------
+
+#[test]
+fn the_example_decodes_and_fixes() {
+    use super::bits::DataBit;
+    use super::example::{constellation, observations, subframe_bits, subframe_words};
+    use super::subframe::SubframeSync;
+    let ephs = constellation();
+    // subframes 1-3 of PRN 7 through the synchronizer and the store
+    let mut sync = SubframeSync::new();
+    let mut store = NavigationStore::default();
+    let mut epoch = 1000u64;
+    let push = |sync: &mut SubframeSync, b: bool, epoch: &mut u64| {
+        *epoch += 20;
+        sync.push(&DataBit {
+            value: b,
+            start_epoch: *epoch,
+            strength: 1.0,
+        })
+    };
+    for b in [false, true, true, false, false, false] {
+        assert_eq!(push(&mut sync, b, &mut epoch), Ok(None));
+    }
+    let mut got = Vec::new();
+    for id in 1..=3u8 {
+        let bits = subframe_bits(&subframe_words(&ephs[6], id, 39_600 + u32::from(id)));
+        for (i, &b) in bits.iter().enumerate() {
+            let r = push(&mut sync, b, &mut epoch);
+            assert!(r.is_ok(), "subframe {id} bit {i}: {r:?}");
+            if let Some(sf) = r.unwrap() {
+                got.push(store.add_subframe(7, &sf).unwrap());
+            }
+        }
+    }
+    assert_eq!(got.len(), 3);
+    assert!(matches!(got[2], StoreUpdate::Ephemeris { prn: 7, .. }));
+    let d = store.ephemeris(7).unwrap();
+    let s0 = d.satellite_state(&t(2195, 238_000.0)).unwrap();
+    let s1 = ephs[6].satellite_state(&t(2195, 238_000.0)).unwrap();
+    assert!((Vector3::from(s0.position_m) - Vector3::from(s1.position_m)).norm() < 0.1);
+    // a fix at Kyiv from the example's observations
+    let rx = kyiv();
+    let at = t(2195, 238_000.0);
+    let p = [rx.position.x, rx.position.y, rx.position.z];
+    let obs = observations(&ephs, &p, &[0.0; 3], 1000.0, &at, 8).unwrap();
+    assert_eq!(obs.len(), 8);
+    let cfg = SolverConfig {
+        ionosphere: false,
+        troposphere: false,
+        ..SolverConfig::ground()
+    };
+    let rx_clock = at.add_seconds(1000.0 / REF_C).unwrap();
+    let fix = solve(&obs, &ephs[..], None, &rx_clock, None, &cfg).unwrap();
+    assert!(position_error(&fix, &rx).norm() < 0.01);
+}
