@@ -260,6 +260,11 @@ impl SubframeSync {
     }
 }
 
+/// The start epoch of the subframe after the one starting at `start`.
+fn next_start(start: u64) -> u64 {
+    start.saturating_add(SUBFRAME_BITS * EPOCHS_PER_BIT)
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -375,9 +380,4 @@ mod tests {
         };
         assert_eq!(s.start_tow_s(), 604_794);
     }
-}
-
-/// The start epoch of the subframe after the one starting at `start`.
-fn next_start(start: u64) -> u64 {
-    start.saturating_add(SUBFRAME_BITS * EPOCHS_PER_BIT)
 }
