@@ -385,8 +385,9 @@ impl Ephemeris {
 
     /// The satellite at the GPS time of transmission of a signal whose satellite-clock
     /// time of transmission is `t_sv`: `t = t_sv − Δt_sv(t_sv)` (IS-GPS-200 20.3.3.3.3.1; the
-    /// clock is evaluated at `t_sv`, whose error is below 10⁻¹² s), then the state at `t`.
-    /// Returns `(t, state)`.
+    /// clock is evaluated at `t_sv`, whose error is below 10⁻¹² s). The state is computed once,
+    /// at `t_sv`, and carried to `t` along the velocity: the error `½ |a| Δt_sv²` is below
+    /// 1 µm for `|Δt_sv| ≤ 1 ms`. Returns `(t, state)`.
     ///
     /// # Errors
     /// As [`Self::satellite_state`].
@@ -394,10 +395,25 @@ impl Ephemeris {
         &self,
         t_sv: &GpsTime,
     ) -> Result<(GpsTime, SatelliteState), OrbitError> {
-        let offset = self.clock_offset_s(t_sv)?;
+        let mut state = self.satellite_state(t_sv)?;
+        let offset = state.clock_s;
         let t = t_sv.add_seconds(-offset)?;
-        let state = self.satellite_state(&t)?;
+        for (p, v) in state.position_m.iter_mut().zip(state.velocity_m_s.iter()) {
+            *p -= v * offset;
+        }
         Ok((t, state))
+    }
+
+    /// The state at `t + dt` from the state at `t` for a small `dt` (a light-time step),
+    /// along the velocity: error `½ |a| dt²` (0.6 m/s² for GPS: 3 mm at `dt` = 0.1 s, µm at
+    /// the millisecond corrections of a light-time iteration).
+    pub fn extrapolate(state: &SatelliteState, dt: f64) -> SatelliteState {
+        let mut out = *state;
+        for (p, v) in out.position_m.iter_mut().zip(state.velocity_m_s.iter()) {
+            *p += v * dt;
+        }
+        out.clock_s += state.clock_rate * dt;
+        out
     }
 }
 

@@ -3,13 +3,23 @@
 //! pseudoranges and Dopplers of a receiver. The firmware budgets and the tests use it.
 
 use heapless::Vec;
+use nalgebra::Vector3;
 
+use super::atmosphere::{klobuchar_delay_m, troposphere_delay_m};
 use super::ephemeris::{Ephemeris, OrbitError};
+use super::geodesy::{elevation_azimuth, Geodetic};
+use super::message::KlobucharParameters;
 use super::parity::{encode_word, solve_trailing_zeros};
 use super::solution::{Observation, MAX_SATELLITES};
 use super::subframe::PREAMBLE;
 use super::time::{GpsTime, TimeError};
 use super::{GPS_PI, L1_WAVELENGTH_M, OMEGA_EARTH, SPEED_OF_LIGHT};
+
+/// A typical broadcast ionosphere (mid solar activity).
+pub const EXAMPLE_KLOBUCHAR: KlobucharParameters = KlobucharParameters {
+    alpha: [1.1176e-8, 7.4506e-9, -5.9605e-8, -5.9605e-8],
+    beta: [90_112.0, 16_384.0, -196_608.0, -131_072.0],
+};
 
 /// Week of the example's ephemerides.
 pub const EXAMPLE_WEEK: u16 = 2195;
@@ -177,7 +187,8 @@ impl crate::error::Error for ExampleError {
 /// Earth (their line of sight passes 100 km above the surface) for a receiver at `position`
 /// (ECEF, m) with velocity `velocity` (ECEF, m/s) and clock bias `clock_bias_m`, received at
 /// GPS time `receive`; at most `count` (and [`MAX_SATELLITES`]), highest above the
-/// receiver's horizontal plane first. No atmosphere.
+/// receiver's horizontal plane first. With `atmosphere`, the broadcast ionosphere and the
+/// troposphere of [`super::atmosphere`] are added (a ground receiver).
 ///
 /// # Errors
 /// [`ExampleError`] from a satellite's orbit or the time.
@@ -188,12 +199,23 @@ pub fn observations(
     clock_bias_m: f64,
     receive: &GpsTime,
     count: usize,
+    atmosphere: Option<&KlobucharParameters>,
 ) -> Result<Vec<Observation, MAX_SATELLITES>, ExampleError> {
     let mut ranked: Vec<(f64, Observation), EXAMPLE_SATELLITES> = Vec::new();
+    let site = Geodetic::from_ecef(position);
     for e in ephemerides {
-        let Some((height, obs)) = observe(e, position, velocity, clock_bias_m, receive)? else {
+        let Some((height, mut obs, u)) = observe(e, position, velocity, clock_bias_m, receive)?
+        else {
             continue;
         };
+        if let (Some(params), Some(g)) = (atmosphere, site) {
+            let ned = g.ecef_to_ned() * Vector3::new(u[0] as f32, u[1] as f32, u[2] as f32);
+            let (el, az) = elevation_azimuth(&ned);
+            let (lat, lon) = (g.lat_rad as f32, g.lon_rad as f32);
+            let delay = klobuchar_delay_m(params, lat, lon, el.max(0.0), az, receive.tow_s)
+                + troposphere_delay_m(g.height_m as f32, el.max(0.0));
+            obs.pseudorange_m += f64::from(delay);
+        }
         if ranked.push((height, obs)).is_err() {
             break;
         }
@@ -208,15 +230,15 @@ pub fn observations(
     Ok(out)
 }
 
-/// One satellite: `(sine of the elevation above the horizontal plane, observation)`, `None`
-/// when the Earth hides it.
+/// One satellite: `(sine of the elevation above the horizontal plane, observation, unit line
+/// of sight ECEF)`, `None` when the Earth hides it.
 fn observe(
     e: &Ephemeris,
     position: &[f64; 3],
     velocity: &[f64; 3],
     clock_bias_m: f64,
     receive: &GpsTime,
-) -> Result<Option<(f64, Observation)>, ExampleError> {
+) -> Result<Option<(f64, Observation, [f64; 3])>, ExampleError> {
     let sub = |a: &[f64; 3], b: &[f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let norm = |a: &[f64; 3]| libm::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -257,5 +279,5 @@ fn observe(
         sigma_m: 3.0,
     };
     let up = dot(&u, position) / norm(position);
-    Ok(Some((up, obs)))
+    Ok(Some((up, obs, u)))
 }

@@ -2,7 +2,9 @@
 //! the frame the attitude is expressed in.
 //!
 //! The direction is the one the signal arrives from: the satellite at its time of
-//! transmission `t − τ` (light time iterated, [`LIGHT_TIME_ITERATIONS`]), carried into the
+//! transmission `t − τ` (the orbit computed once at `t − 75 ms`, the light time iterated
+//! [`LIGHT_TIME_ITERATIONS`] times along the satellite's velocity: 3 mm at most for the
+//! ±70 ms a LEO's flight times differ from the guess), carried into the
 //! ECEF frame of the reception by the Earth's rotation during `τ` (Sagnac). host-sim's truth
 //! uses instantaneous geometry instead; the two differ by `v_sat τ / ρ ≈ 1.3·10⁻⁵ rad`, which a
 //! 0.5 m baseline turns into 7 µm of single difference.
@@ -26,6 +28,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::ephemeris::{Ephemeris, OrbitError};
 use super::filter::NavState;
 use super::geodesy::{elevation_azimuth, Geodetic};
+use super::solution::small_rotation;
 use super::time::GpsTime;
 use super::{OMEGA_EARTH, SPEED_OF_LIGHT};
 use crate::receiver::SatelliteAiding;
@@ -119,13 +122,19 @@ pub fn line_of_sight(
     if !(rx.iter().chain(vx.iter()).all(|v| v.is_finite())) {
         return Err(LosError::Degenerate);
     }
+    // the satellite once at t − τ0, then the light time iterated along its velocity
+    let t0 = receiver
+        .time
+        .add_seconds(-FLIGHT_GUESS_S)
+        .map_err(OrbitError::from)?;
+    let s0 = ephemeris.satellite_state(&t0)?;
     let (mut p, mut v) = (Vector3::zeros(), Vector3::zeros());
     let mut tau = FLIGHT_GUESS_S;
     for _ in 0..LIGHT_TIME_ITERATIONS {
-        let t = receiver.time.add_seconds(-tau).map_err(OrbitError::from)?;
-        let s = ephemeris.satellite_state(&t)?;
+        let s = Ephemeris::extrapolate(&s0, FLIGHT_GUESS_S - tau);
         // into the ECEF frame of the reception: R_z(−ω⊕ τ)
-        let c = rz(-OMEGA_EARTH * tau);
+        let (st, ct) = small_rotation(-OMEGA_EARTH * tau);
+        let c = Matrix3::new(ct, -st, 0.0, st, ct, 0.0, 0.0, 0.0, 1.0);
         p = c * Vector3::from(s.position_m);
         v = c * Vector3::from(s.velocity_m_s);
         tau = (p - rx).norm() / SPEED_OF_LIGHT;

@@ -967,14 +967,22 @@ fn the_example_decodes_and_fixes() {
     let rx = kyiv();
     let at = t(2195, 238_000.0);
     let p = [rx.position.x, rx.position.y, rx.position.z];
-    let obs = observations(&ephs, &p, &[0.0; 3], 1000.0, &at, 8).unwrap();
+    let iono = super::example::EXAMPLE_KLOBUCHAR;
+    let obs = observations(&ephs, &p, &[0.0; 3], 1000.0, &at, 8, Some(&iono)).unwrap();
     assert_eq!(obs.len(), 8);
-    let cfg = SolverConfig {
-        ionosphere: false,
-        troposphere: false,
-        ..SolverConfig::ground()
-    };
     let rx_clock = at.add_seconds(1000.0 / REF_C).unwrap();
-    let fix = solve(&obs, &ephs[..], None, &rx_clock, None, &cfg).unwrap();
-    assert!(position_error(&fix, &rx).norm() < 0.01);
+    let fix = solve(
+        &obs,
+        &ephs[..],
+        Some(&iono),
+        &rx_clock,
+        None,
+        &SolverConfig::ground(),
+    )
+    .unwrap();
+    assert!(
+        position_error(&fix, &rx).norm() < 0.01,
+        "{:?}",
+        position_error(&fix, &rx)
+    );
 }
