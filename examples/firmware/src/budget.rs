@@ -121,6 +121,7 @@ pub fn run_all() {
     gyro_budgets();
     one_stage_budgets();
     receiver_budgets();
+    nav_budgets();
 }
 
 fn ekf_budgets() {
@@ -742,3 +743,107 @@ fn packing_budgets() {
     hprintln!("budget packing: samples packed {} {} {} {}", n, n1, n2, n3);
 }
 
+/// Navigation (`nav`, f64 soft-float on the M4F for times, ranges and orbits): one subframe
+/// decode, one satellite's position, a single-point fix from 8 satellites (LEO and ground
+/// configurations), the LEO filter and the lines of sight.
+fn nav_budgets() {
+    use gnss_attitude::nav::bits::DataBit;
+    use gnss_attitude::nav::example::{self, EXAMPLE_KLOBUCHAR};
+    use gnss_attitude::nav::geodesy::Geodetic;
+    use gnss_attitude::nav::{
+        line_of_sight, solve, GpsTime, NavigationStore, OrbitFilter, OrbitFilterConfig, ReferenceFrame,
+        SolverConfig, SubframeSync,
+    };
+    let ephs = example::constellation();
+    // subframes 1 and 2 of PRN 7 held, subframe 3 decoded bit by bit; the last bit completes it
+    let mut sync = SubframeSync::new();
+    let mut store = NavigationStore::default();
+    let mut epoch = 0u64;
+    let mut bit = |value: bool| {
+        epoch += 20;
+        DataBit { value, start_epoch: epoch, strength: 1.0 }
+    };
+    let _ = sync.push(&bit(false));
+    let _ = sync.push(&bit(false));
+    let mut last = None;
+    for id in 1..=3u8 {
+        let bits = example::subframe_bits(&example::subframe_words(&ephs[6], id, 39_600 + u32::from(id)));
+        for (k, &b) in bits.iter().enumerate() {
+            let d = bit(b);
+            if id == 3 && k == 299 {
+                last = Some(d);
+            } else if id == 3 && k == 150 {
+                let _ = measure("nav subframe sync, one bit inside a subframe (shift, preamble test)", || {
+                    black_box(&mut sync).push(black_box(&d)).is_ok()
+                });
+            } else if let Ok(Some(sf)) = sync.push(&d) {
+                let _ = store.add_subframe(7, &sf);
+            }
+        }
+    }
+    if let Some(d) = last {
+        let stored = measure("nav subframe decode: the bit completing subframe 3 (10-word parity) + store (fields, IODE/IODC, plausibility)", || {
+            match black_box(&mut sync).push(black_box(&d)) {
+                Ok(Some(sf)) => black_box(&mut store).add_subframe(7, &sf).is_ok(),
+                _ => false,
+            }
+        });
+        hprintln!("nav budgets: subframe decoded and ephemeris stored: {}", stored && store.ephemeris(7).is_some());
+    }
+    let Ok(at) = GpsTime::new(example::EXAMPLE_WEEK, 238_000.0) else { return };
+    let _ = measure("nav satellite position, velocity, clock of 1 satellite (f64 Kepler, user algorithm)", || {
+        black_box(&ephs[3]).satellite_state(black_box(&at)).is_ok()
+    });
+    // LEO: 550 km above Kyiv, 7.6 km/s
+    let leo = Geodetic { lat_rad: 0.8805, lon_rad: 0.5327, height_m: 550e3 }.to_ecef();
+    let v = [-3000.0, 2500.0, 6500.0];
+    let clock = 1000.0;
+    let Ok(rx_clock) = at.add_seconds(clock / 299_792_458.0) else { return };
+    let Ok(obs) = example::observations(&ephs, &leo, &v, clock, &at, 8, None) else { return };
+    let fix = measure("nav fix LEO, 8 satellites (orbits, LS f64 state/f32 normal eqs, Sagnac, DOP, velocity, residual check)", || {
+        solve(black_box(&obs[..]), black_box(&ephs[..]), None, black_box(&rx_clock), None, &SolverConfig::leo())
+    });
+    let prior = [leo[0] + 100.0, leo[1] - 60.0, leo[2] + 80.0];
+    let _ = measure("nav fix LEO, 8 satellites, started from a prediction 140 m off (the 1 Hz case)", || {
+        solve(black_box(&obs[..]), black_box(&ephs[..]), None, black_box(&rx_clock), Some(&prior), &SolverConfig::leo()).is_ok()
+    });
+    let ground = Geodetic { lat_rad: 0.8805, lon_rad: 0.5327, height_m: 180.0 }.to_ecef();
+    let iono = EXAMPLE_KLOBUCHAR;
+    if let Ok(gobs) = example::observations(&ephs, &ground, &[0.0; 3], clock, &at, 8, Some(&iono)) {
+        let g = measure("nav fix ground, 8 satellites (as LEO + Klobuchar + troposphere + 5 deg mask)", || {
+            solve(black_box(&gobs[..]), black_box(&ephs[..]), Some(&iono), black_box(&rx_clock), None, &SolverConfig::ground())
+        });
+        match g {
+            Ok(f) => hprintln!("nav budgets: ground fix {} sats, {} iterations, error {} m", f.satellites, f.iterations,
+                ((f.position_m[0] - ground[0]).powi(2) + (f.position_m[1] - ground[1]).powi(2) + (f.position_m[2] - ground[2]).powi(2)).sqrt()),
+            Err(e) => hprintln!("nav budgets: ground fix refused: {:?}", e),
+        }
+    }
+    let Ok(fix) = fix else {
+        hprintln!("nav budgets: LEO fix refused");
+        return;
+    };
+    hprintln!("nav budgets: LEO fix {} sats, {} iterations, pdop {}, error {} m", fix.satellites, fix.iterations, fix.dop.pdop,
+        ((fix.position_m[0] - leo[0]).powi(2) + (fix.position_m[1] - leo[1]).powi(2) + (fix.position_m[2] - leo[2]).powi(2)).sqrt());
+    let Ok(mut filter) = OrbitFilter::from_fix(&fix, OrbitFilterConfig::default()) else { return };
+    let Ok(next) = fix.time.add_seconds(1.0) else { return };
+    let _ = measure("nav LEO filter predict 1 s (RK4 2-body + J2 f64, 6x6 covariance f32)", || {
+        black_box(&mut filter).predict_to(black_box(&next)).is_ok()
+    });
+    let mut later = fix;
+    later.time = next;
+    let _ = measure("nav LEO filter update with a fix (6-D Joseph update, gate)", || {
+        black_box(&mut filter).update(black_box(&later)).is_ok()
+    });
+    let state = filter.state();
+    let frame = ReferenceFrame::Inertial { epoch: at };
+    let _ = measure("nav lines of sight + rates, 8 satellites, inertial frame (light time x3)", || {
+        let mut n = 0;
+        for o in black_box(&obs).iter() {
+            if let Some(e) = ephs.iter().find(|e| e.prn == o.prn) {
+                n += usize::from(line_of_sight(black_box(&state), e, &frame).is_ok());
+            }
+        }
+        n
+    });
+}

@@ -73,6 +73,7 @@ fn main() -> ! {
     signal_chain();
     receiver();
     sample_receiver();
+    navigation();
     loop {
         cortex_m::asm::nop();
     }
@@ -531,6 +532,49 @@ fn sample_receiver() {
     }
     let _ = black_box(rx.attitude());
     let _ = black_box(rx.release(prn));
+}
+
+/// Navigation: the channel decoder, the store, the fix, the LEO filter, the lines of sight.
+#[inline(never)]
+fn navigation() {
+    use gnss_attitude::nav::bits::BitSyncConfig;
+    use gnss_attitude::nav::example;
+    use gnss_attitude::nav::{
+        line_of_sight, solve, ChannelDecoder, GpsTime, NavigationStore, Observation, OrbitFilter,
+        OrbitFilterConfig, ReferenceFrame, SolverConfig,
+    };
+    let mut dec = ChannelDecoder::new(black_box(5), BitSyncConfig::default());
+    let mut store = NavigationStore::default();
+    for k in 0..black_box(4000u64) {
+        if let Ok(Some(sf)) = dec.push_prompt(black_box(k), black_box(1.0)) {
+            let _ = black_box(store.add_subframe(black_box(5), &sf));
+        }
+        if let Err(gnss_attitude::nav::decoder::DecodeError::Subframe(e)) = dec.push_prompt(black_box(k), black_box(-1.0)) {
+            store.record_decode_error(&e);
+        }
+    }
+    let _ = black_box(dec.transmit_time(black_box(5000), black_box(100.0)));
+    let ephs = black_box(example::constellation());
+    let t = GpsTime { week: black_box(2195), tow_s: black_box(238_000.0) };
+    let obs: [Observation; 8] = core::array::from_fn(|i| Observation {
+        prn: black_box(i as u8 + 1),
+        transmit: t,
+        pseudorange_m: black_box(2.1e7),
+        doppler_hz: Some(black_box(100.0)),
+        sigma_m: black_box(3.0),
+    });
+    let iono = example::EXAMPLE_KLOBUCHAR;
+    if let Ok(fix) = solve(&obs, &ephs[..], Some(&iono), &t, None, &black_box(SolverConfig::ground())) {
+        if let Ok(mut f) = OrbitFilter::from_fix(&fix, OrbitFilterConfig::default()) {
+            let _ = black_box(f.predict_to(&black_box(t)));
+            let _ = black_box(f.update(&fix));
+            for e in ephs.iter() {
+                let _ = black_box(line_of_sight(&f.state(), e, &ReferenceFrame::LocalNed));
+                let _ = black_box(line_of_sight(&f.state(), e, &ReferenceFrame::Inertial { epoch: t }));
+            }
+        }
+    }
+    let _ = black_box(solve(&obs, &store, None, &t, None, &black_box(SolverConfig::leo())));
 }
 
 #[panic_handler]

@@ -13,13 +13,13 @@ use super::carrier::{self, CarrierLevels, CarrierStep, CarrierWords};
 use super::code::{self, CodeCursor, CodeTable, EXT_BYTES, MIN_TABLE_SAMPLE_RATE_HZ};
 use super::kernel::{self, ChunkPlanes, StreamWords, CHUNK_WORDS, MAX_STREAMS};
 use super::planes::{PlaneFormat, WORD_SAMPLES};
-use crate::error::SignalError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, QUIET_OFFSET_CHIPS};
 use crate::signal::correlator::{
     CorrelatorConfig, EpochCorrelations, Iq, SlaveTaps, Taps, MAX_EARLY_LATE_OFFSET,
     MAX_SAMPLES_PER_EPOCH,
 };
 use crate::signal::nco::{CarrierNco, CodeNco, CODE_WRAP};
+use crate::signal::SignalError;
 
 /// Largest noise-tap delay, samples (the quiet offsets of all PRNs stay below it up to
 /// 60 Msps).

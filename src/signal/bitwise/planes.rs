@@ -25,8 +25,8 @@
 //! with a magnitude threshold (2-bit) or signs only (1-bit). Every packer reproduces
 //! `SampleFormat::decode` followed by `pack_i8` (threshold 2) bit for bit; tests check it.
 
-use crate::error::SampleError;
 use crate::signal::samples::SampleFormat;
+use crate::signal::SampleError;
 
 /// Error returned by the packers of [`PlaneBuffer`], [`AntennaPlanes::new`] and
 /// [`BitBlock::new`](super::BitBlock::new).
