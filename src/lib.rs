@@ -42,6 +42,7 @@
 //! | [`gyro`] | Gyro propagation and in-flight calibration against a reference attitude (paper 001) |
 //! | [`noise`] | Seeded test-signal and noise generators over any [`rand_core::RngCore`] |
 //! | [`selftest`] | A deterministic computation that firmware runs and compares with the host |
+//! | [`formats`] | The attitude as NMEA `$GPHDT`/`$GPTHS` sentences and a binary telemetry record |
 //! | [`error`] | The crate's error enums and their [`ErrorKind`] classification |
 //!
 //! # Frames and units
@@ -76,6 +77,7 @@ mod log;
 pub mod attitude;
 pub mod ekf;
 pub mod error;
+pub mod formats;
 pub mod frontend;
 pub mod geometry;
 pub mod gyro;
