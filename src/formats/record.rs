@@ -34,8 +34,6 @@ pub const RECORD_VERSION: u8 = 1;
 /// Bytes of a version-1 record.
 pub const RECORD_LEN: usize = 50;
 
-/// Offset of the CRC (the bytes before it are covered).
-const CRC_OFFSET: usize = RECORD_LEN - 2;
 /// Milliseconds per second (coasting time field).
 const MS_PER_S: f32 = 1000.0;
 
