@@ -190,8 +190,8 @@ impl Heading {
         if self.mode == HeadingMode::Invalid || !self.degrees.is_finite() {
             return None;
         }
-        let r = libm::fmodf(self.degrees, 360.0);
-        let turns = if r < 0.0 { r + 360.0 } else { r };
+        // into [0, 360) without fmodf (whose libm code keeps panic paths)
+        let turns = self.degrees - 360.0 * libm::floorf(self.degrees / 360.0);
         // rounding may reach a full turn: that is north
         let centi = libm::roundf(turns * CENTIDEGREES) as u32;
         Some(if centi >= FULL_TURN_CENTIDEGREES {
