@@ -68,6 +68,8 @@
 )]
 // `!(x > y)` is used on purpose: unlike `x <= y` it is true for NaN, so a NaN fails the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+// MSRV 1.87 makes clippy suggest `is_multiple_of`; `% n == 0` stays until the owners switch.
+#![allow(clippy::manual_is_multiple_of)]
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 

@@ -54,10 +54,7 @@ pub fn record(attitude: &ReceiverAttitude, frame: Option<&HeadingFrame>) {
         return;
     }
     let heading = match frame {
-        Some(f) => match Heading::from_attitude(attitude, f) {
-            Ok(h) => h,
-            Err(_) => Heading::default(),
-        },
+        Some(f) => Heading::from_attitude(attitude, f).unwrap_or_default(),
         None => Heading::default(),
     };
     let mut buf = [0u8; MAX_SENTENCE];
