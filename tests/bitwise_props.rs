@@ -89,7 +89,7 @@ fn planes(rng: &mut ChaCha8Rng, len: usize) -> [Vec<u32>; 4] {
     let words = len.div_ceil(32);
     core::array::from_fn(|_| {
         let mut v: Vec<u32> = (0..words).map(|_| rng.random()).collect();
-        if len % 32 != 0 {
+        if !len.is_multiple_of(32) {
             if let Some(last) = v.last_mut() {
                 *last &= (1u32 << (len % 32)) - 1;
             }

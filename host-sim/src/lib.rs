@@ -15,6 +15,7 @@
 //!   commands.
 
 pub mod chain;
+pub mod nmea_out;
 pub mod record;
 pub mod report;
 pub mod scenarios;

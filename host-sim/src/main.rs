@@ -52,6 +52,10 @@ enum Command {
         /// Directory for CSV time series and PNG plots (nothing is written without it).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write the receiver's heading as NMEA $GPHDT/$GPTHS sentences to this file
+        /// (scenario microsat).
+        #[arg(long)]
+        nmea: Option<PathBuf>,
     },
     /// Acquisition on the first milliseconds of a recorded sample file.
     Acquire {
@@ -213,6 +217,22 @@ impl SearchArgs {
     }
 }
 
+/// Runs `f` with the NMEA sink of `--nmea` installed (when given), then closes it.
+fn with_nmea(
+    path: Option<&std::path::Path>,
+    f: impl FnOnce() -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    if let Some(p) = path {
+        host_sim::nmea_out::install(p)?;
+    }
+    let result = f();
+    let sentences = host_sim::nmea_out::finish()?;
+    if let Some(p) = path {
+        eprintln!("host-sim: {sentences} NMEA sentences in {}", p.display());
+    }
+    result
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -226,7 +246,10 @@ fn main() -> ExitCode {
             seed,
             json,
             out,
-        }) => run(&scenario, variant.as_deref(), seed, json, out),
+            nmea,
+        }) => with_nmea(nmea.as_deref(), || {
+            run(&scenario, variant.as_deref(), seed, json, out)
+        }),
         Some(Command::Acquire { file, search, json }) => acquire(&file, &search, json),
         Some(Command::Track {
             file,

@@ -6,7 +6,7 @@
 //!
 //! `M` maps gyro (body) axes to the computed inertial frame `K`; with a perfect gyro `K` is
 //! fixed, so the fine filter works in the frame `F(t) = C_rK₀ M(t)`, in which the body's
-//! attitude is constant up to the gyro's errors (see [`super::fine`]).
+//! attitude is constant up to the gyro's errors (see the `fine` stage).
 
 use nalgebra::{SMatrix, SVector, Vector3};
 

@@ -41,7 +41,7 @@
 //!    resolution fixes the integers — on double differences across satellites, so that the
 //!    unknown line biases cancel — and gives the first attitude and the line biases (modulo a
 //!    cycle, together with the integers), or refuses and the next window tries again.
-//! 3. **Fine attitude** ([`fine`]): with a gyro, the gyro-aided filter
+//! 3. **Fine attitude** (`fine`): with a gyro, the gyro-aided filter
 //!    ([`crate::attitude::gyro_aided`]): the gyro is the process model with its own noise,
 //!    the block single differences the measurements, the gyro bias and the line biases
 //!    states. Without a gyro (or with the gyro excluded), paper 003's one-stage loop on the

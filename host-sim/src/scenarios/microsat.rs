@@ -10,6 +10,7 @@ pub mod bound;
 pub mod fast_path;
 pub mod files;
 pub mod metrics;
+pub mod nmea;
 pub mod run;
 pub mod sample_level;
 pub mod world;

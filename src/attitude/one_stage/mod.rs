@@ -12,7 +12,7 @@
 //! | Step | Paper | Here |
 //! |---|---|---|
 //! | Rotation `U(α) = R_z(γ) R_y(β) R_x'(α)` | (2) | [`crate::geometry::Paper003Angles`], [`paper003_partials`] |
-//! | Antenna phases `ψ_{P,i}`, Jacobian `∂Ψ/∂α` | (4), (24)–(28) | [`AntennaArray`], [`PhaseModel`] |
+//! | Antenna phases `ψ_{P,i}`, Jacobian `∂Ψ/∂α` | (4), (24)–(28) | [`AntennaArray`](crate::attitude::array::AntennaArray), [`PhaseModel`] |
 //! | Coherent sum and `X_i²` | (18), (20) | [`coherent_sum`], [`satellite_terms`] |
 //! | Phase discriminators `(I₁/I₀)(aX) a ∂X/∂ψ` | (22), (23) | [`satellite_terms`], [`BesselRatio`] |
 //! | Angle discriminator `u_α = (∂Ψ/∂α)ᵀ u_ψ` | (32) | [`EpochInformation::gradient`] |

@@ -497,6 +497,7 @@ fn record_sample(
 ) {
     let att = receiver.attitude();
     let t = (att.epoch as f64 + 0.5) * EPOCH_S;
+    super::nmea::record(&att, world, t);
     let truth = world.motion.q_ib(t);
     let has = att.source != AttitudeSource::None;
     let (fine_error, fine_locked) = match receiver.fine_estimate() {
