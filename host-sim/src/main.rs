@@ -320,7 +320,7 @@ fn run(
         seed,
         out_dir: out,
     };
-    let outcome = (scenario.run)(&ctx)?;
+    let outcome = scenario.run(&ctx)?;
     let document = outcome.to_json(scenario.name, variant, seed);
     if json {
         println!("{}", serde_json::to_string(&document)?);

@@ -6,7 +6,7 @@ mod plot;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::Value;
 
-use crate::scenarios::Outcome;
+use crate::outcome::Outcome;
 
 pub use csv_out::write_csv;
 pub use plot::{plot_lines, plot_panels, Panel, Series};

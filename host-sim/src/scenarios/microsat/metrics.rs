@@ -4,7 +4,6 @@
 
 use gnss_attitude::receiver::{AttitudeSource, ReceiverEvent};
 use nalgebra::Vector3;
-use serde_json::{json, Value};
 
 use super::run::{FlightRecord, Sample, StageSample};
 
@@ -32,19 +31,25 @@ pub struct StageStats {
     pub satellites: f64,
 }
 
-/// One injected fault's outcome.
-#[derive(Clone, Debug)]
-pub struct FaultOutcome {
-    /// Name.
-    pub name: String,
-    /// Whether the receiver reported it.
-    pub detected: bool,
-    /// Seconds from the fault's end until the receiver had recovered (see each fault).
-    pub recovered_s: Option<f64>,
-    /// When it happened, s.
-    pub at_s: f64,
-    /// What was detected and done.
-    pub detail: String,
+crate::metrics! {
+    /// One injected (or natural) fault's outcome.
+    pub struct FaultOutcome {
+        /// The fault.
+        #[metric(unit = "")]
+        pub name: String,
+        /// Whether the receiver reported it.
+        #[metric(unit = "")]
+        pub detected: bool,
+        /// From the fault's end until the receiver had recovered (null: never).
+        #[metric(unit = "s")]
+        pub recovered_s: Option<f64>,
+        /// When it happened.
+        #[metric(unit = "s")]
+        pub at_s: f64,
+        /// What was detected and done.
+        #[metric(unit = "")]
+        pub detail: String,
+    }
 }
 
 /// Everything the scenario reports.
@@ -243,24 +248,6 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
 /// Degrees.
 pub fn deg(v: &Vector3<f64>) -> [f64; 3] {
     [v.x.to_degrees(), v.y.to_degrees(), v.z.to_degrees()]
-}
-
-/// The faults as JSON.
-pub fn faults_json(faults: &[FaultOutcome]) -> Value {
-    Value::Array(
-        faults
-            .iter()
-            .map(|f| {
-                json!({
-                    "name": f.name,
-                    "detected": f.detected,
-                    "recovered_s": f.recovered_s,
-                    "at_s": f.at_s,
-                    "detail": f.detail,
-                })
-            })
-            .collect(),
-    )
 }
 
 /// First time `≥ from` after which the receiver's attitude comes from the fine filter with its
