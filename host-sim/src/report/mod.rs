@@ -9,7 +9,7 @@ use serde_json::Value;
 use crate::outcome::Outcome;
 
 pub use csv_out::write_csv;
-pub use plot::{plot_lines, plot_panels, Panel, Series};
+pub use plot::{palette, plot_lines, plot_panels, Dash, Panel, Series};
 
 /// A progress bar on stderr for `len` steps. indicatif hides it when stderr is not a terminal,
 /// so it never pollutes `--json` output or CI logs.

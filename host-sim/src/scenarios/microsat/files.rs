@@ -10,7 +10,7 @@ use plotters::prelude::*;
 
 use super::metrics::{deg, FlightMetrics};
 use super::run::FlightRecord;
-use crate::report::{plot_panels, write_csv, Panel, Series};
+use crate::report::{plot_panels, write_csv, Dash, Panel, Series};
 
 fn source_code(s: AttitudeSource) -> f64 {
     match s {
@@ -180,12 +180,15 @@ fn plot_error(
     let from = metrics.ttff_s;
     for (a, name) in axes.iter().enumerate() {
         let pts = |f: &dyn Fn(&super::run::Sample) -> f64| -> Vec<(f64, f64)> {
+            // no attitude: a gap in the line
             record
                 .samples
                 .iter()
-                .filter(|s| s.t >= from && s.source != AttitudeSource::None)
-                .map(|s| (s.t, f(s)))
-                .filter(|p| p.1.is_finite())
+                .filter(|s| s.t >= from)
+                .map(|s| match s.source {
+                    AttitudeSource::None => (s.t, f64::NAN),
+                    _ => (s.t, f(s)),
+                })
                 .collect()
         };
         let mut series = vec![
@@ -220,45 +223,58 @@ fn plot_error(
     )
 }
 
-fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
+/// Colours of the plot palette.
+const PALETTE_SIZE: usize = 10;
+/// Gap between two sky points of one satellite (1 s apart) that breaks its C/N0 line, s.
+const SKY_GAP_S: f64 = 1.5;
+
+/// The four satellite counts as nested stripes, widest and palest at the bottom, so that
+/// counts that coincide (they often do) all stay visible: above the mask ⊇ tracked ⊇ in the
+/// fine filter ⊇ ambiguities fixed.
+fn count_series(record: &FlightRecord) -> Vec<Series> {
     let s = &record.samples;
-    let count = vec![
-        Series::line(
-            "above the mask",
-            s.iter().map(|x| (x.t, x.visible as f64)).collect(),
-            3,
-        ),
-        Series::line(
-            "tracked",
-            s.iter().map(|x| (x.t, x.tracked as f64)).collect(),
-            0,
-        ),
-        Series::line(
-            "in the fine filter",
-            s.iter().map(|x| (x.t, x.used as f64)).collect(),
-            1,
-        ),
-        Series::line(
-            "ambiguities fixed",
-            s.iter().map(|x| (x.t, x.fixed as f64)).collect(),
-            2,
-        ),
-    ];
+    let pts = |f: fn(&super::run::Sample) -> usize| -> Vec<(f64, f64)> {
+        s.iter().map(|x| (x.t, f(x) as f64)).collect()
+    };
+    vec![
+        Series::steps("above the mask", &pts(|x| x.visible), 7).styled(Dash::Solid, 12),
+        Series::steps("tracked", &pts(|x| x.tracked), 0).styled(Dash::Solid, 7),
+        Series::steps("in the fine filter", &pts(|x| x.used), 1).styled(Dash::Solid, 3),
+        Series::steps("ambiguities fixed", &pts(|x| x.fixed), 3).styled(Dash::Dashed, 2),
+    ]
+}
+
+/// Each satellite's reported C/N0 while it is tracked; a gap (NaN) where it is not tracked or
+/// not in view, so that the line breaks instead of joining across.
+fn cn0_series(record: &FlightRecord) -> Vec<Series> {
     let mut prns: Vec<u8> = record.sky.iter().map(|p| p.prn).collect();
     prns.sort_unstable();
     prns.dedup();
     let mut cn0 = Vec::new();
     for (i, prn) in prns.iter().enumerate() {
-        let pts: Vec<(f64, f64)> = record
-            .sky
-            .iter()
-            .filter(|p| p.prn == *prn && p.tracked)
-            .map(|p| (p.t, p.cn0_dbhz))
-            .collect();
-        if pts.len() > 1 {
-            cn0.push(Series::line(format!("PRN {prn}"), pts, i + 4));
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        let mut last_t = f64::NEG_INFINITY;
+        for p in record.sky.iter().filter(|p| p.prn == *prn) {
+            if p.t - last_t > SKY_GAP_S {
+                pts.push((p.t, f64::NAN));
+            }
+            last_t = p.t;
+            pts.push((p.t, if p.tracked { p.cn0_dbhz } else { f64::NAN }));
+        }
+        if pts.iter().filter(|p| p.1.is_finite()).count() > 1 {
+            // the palette's ten colours, then the same dashed
+            let dash = if i < PALETTE_SIZE {
+                Dash::Solid
+            } else {
+                Dash::Dashed
+            };
+            cn0.push(Series::line(format!("PRN {prn}"), pts, i).styled(dash, 2));
         }
     }
+    cn0
+}
+
+fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
     plot_panels(
         path,
         &format!("{title}: satellites and C/N0"),
@@ -266,11 +282,11 @@ fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()
         &[
             Panel {
                 y_label: "satellites".into(),
-                series: count,
+                series: count_series(record),
             },
             Panel {
                 y_label: "C/N0 reported, dB-Hz".into(),
-                series: cn0,
+                series: cn0_series(record),
             },
         ],
     )
@@ -338,7 +354,7 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
     prns.sort_unstable();
     prns.dedup();
     for (i, prn) in prns.iter().enumerate() {
-        let color = Palette99::pick(i + 4).to_rgba();
+        let color = crate::report::palette(i);
         let pts: Vec<(f64, f64, bool)> = record
             .sky
             .iter()
