@@ -12,6 +12,7 @@
 //! * [`truth`]: the f64 truth models (attitude kinematics, ...).
 //! * [`report`]: the human summary, CSV time series, PNG plots, progress bars, and
 //!   `docs/RESULTS.md` (`host-sim report`).
+//! * [`results`]: `host-sim report`, the scenarios' figures into `docs/RESULTS.md`.
 //! * [`stats`]: small statistics helpers (RMS, percentiles, χ² intervals).
 //! * [`synth`]: the coherent three-antenna GPS L1 C/A sample synthesizer.
 //! * [`record`]: recorded sample files: layouts, streaming reader, `acquire` / `track` / `synth`
@@ -22,6 +23,7 @@ pub mod chain;
 pub mod outcome;
 pub mod record;
 pub mod report;
+pub mod results;
 pub mod scenarios;
 pub mod stats;
 pub mod synth;

@@ -1,6 +1,8 @@
-//! Output of the scenarios: the human summary, progress bars, CSV time series and PNG plots.
+//! Output of the scenarios: the human summary, progress bars, CSV time series, PNG plots, and
+//! the Markdown of `docs/RESULTS.md` ([`markdown`]).
 
 mod csv_out;
+pub mod markdown;
 mod plot;
 
 use indicatif::{ProgressBar, ProgressStyle};

@@ -30,8 +30,38 @@ pub fn write_all(
     title: &str,
     summary: &[String],
 ) -> Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
-    // CSV: the receiver every 0.1 s
+    let mut files = vec![write_attitude_csv(dir, record)?];
+    files.extend(write_stage_csvs(dir, record)?);
+    files.push(write_sky_csv(dir, record)?);
+    // CSV: events
+    let path = dir.join("microsat_events.csv");
+    let mut text = String::from("t_s,event\n");
+    for (t, e) in &record.events {
+        let _ = writeln!(text, "{t:.4},\"{e:?}\"");
+    }
+    std::fs::write(&path, text)?;
+    files.push(path);
+    // PNG: attitude error with 3σ
+    let path = dir.join("microsat_attitude_error.png");
+    plot_error(&path, record, metrics, title)?;
+    files.push(path);
+    // PNG: satellites and C/N0
+    let path = dir.join("microsat_satellites.png");
+    plot_satellites(&path, record, title)?;
+    files.push(path);
+    // PNG: sky
+    let path = dir.join("microsat_sky.png");
+    plot_sky(&path, record, title)?;
+    files.push(path);
+    // Markdown report
+    let path = dir.join("microsat_report.md");
+    std::fs::write(&path, markdown(record, metrics, title, summary))?;
+    files.push(path);
+    Ok(files)
+}
+
+/// The receiver every 0.1 s.
+fn write_attitude_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
     let path = dir.join("microsat_attitude.csv");
     let header = [
         "t_s",
@@ -92,8 +122,12 @@ pub fn write_all(
             ]
         }),
     )?;
-    files.push(path);
-    // CSV: the stages at their own epochs
+    Ok(path)
+}
+
+/// The stages at their own epochs.
+fn write_stage_csvs(dir: &Path, record: &FlightRecord) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
     for (name, samples) in [
         ("snapshot", &record.snapshots),
         ("rigid_body", &record.rigid),
@@ -118,7 +152,11 @@ pub fn write_all(
         )?;
         files.push(path);
     }
-    // CSV: the sky
+    Ok(files)
+}
+
+/// The sky every second.
+fn write_sky_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
     let path = dir.join("microsat_sky.csv");
     write_csv(
         &path,
@@ -141,32 +179,7 @@ pub fn write_all(
             ]
         }),
     )?;
-    files.push(path);
-    // CSV: events
-    let path = dir.join("microsat_events.csv");
-    let mut text = String::from("t_s,event\n");
-    for (t, e) in &record.events {
-        let _ = writeln!(text, "{t:.4},\"{e:?}\"");
-    }
-    std::fs::write(&path, text)?;
-    files.push(path);
-    // PNG: attitude error with 3σ
-    let path = dir.join("microsat_attitude_error.png");
-    plot_error(&path, record, metrics, title)?;
-    files.push(path);
-    // PNG: satellites and C/N0
-    let path = dir.join("microsat_satellites.png");
-    plot_satellites(&path, record, title)?;
-    files.push(path);
-    // PNG: sky
-    let path = dir.join("microsat_sky.png");
-    plot_sky(&path, record, title)?;
-    files.push(path);
-    // Markdown report
-    let path = dir.join("microsat_report.md");
-    std::fs::write(&path, markdown(record, metrics, title, summary))?;
-    files.push(path);
-    Ok(files)
+    Ok(path)
 }
 
 fn plot_error(
@@ -314,42 +327,60 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
         .map_err(err)?;
     let mut chart = ChartBuilder::on(&root)
         .margin(20)
-        .build_cartesian_2d(-1.15f64..1.15f64, -1.15f64..1.15f64)
+        .build_cartesian_2d(-SKY_EXTENT..SKY_EXTENT, -SKY_EXTENT..SKY_EXTENT)
         .map_err(err)?;
-    // rings every 30° of elevation, the 10° mask, spokes every 45° of azimuth
+    draw_sky_grid(&mut chart).map_err(err)?;
+    draw_sky_tracks(&mut chart, record).map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// Half-width of the sky plot's square (the horizon is at radius 1).
+const SKY_EXTENT: f64 = 1.15;
+/// Elevation mask drawn on the sky plot, degrees.
+const SKY_MASK_DEG: f64 = 10.0;
+
+type SkyChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+type SkyResult = std::result::Result<
+    (),
+    DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>,
+>;
+
+/// Rings every 30° of elevation, the 10° mask, spokes every 90° of azimuth with labels.
+fn draw_sky_grid(chart: &mut SkyChart<'_, '_>) -> SkyResult {
     for el in [0.0f64, 30.0, 60.0] {
         let r = 1.0 - el / 90.0;
-        chart
-            .draw_series(LineSeries::new(circle(r), BLACK.mix(0.3)))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                format!("{el:.0}°"),
-                (0.02, r - 0.04),
-                ("sans-serif", 14),
-            )))
-            .map_err(err)?;
+        chart.draw_series(LineSeries::new(circle(r), BLACK.mix(0.3)))?;
+        chart.draw_series(std::iter::once(Text::new(
+            format!("{el:.0}°"),
+            (0.02, r - 0.04),
+            ("sans-serif", 14),
+        )))?;
     }
-    let r_mask = 1.0 - 10.0 / 90.0;
-    chart
-        .draw_series(LineSeries::new(circle(r_mask), RED.mix(0.5)))
-        .map_err(err)?;
+    let r_mask = 1.0 - SKY_MASK_DEG / 90.0;
+    chart.draw_series(LineSeries::new(circle(r_mask), RED.mix(0.5)))?;
     for (az, label) in [(0.0f64, "+x"), (90.0, "+y"), (180.0, "−x"), (270.0, "−y")] {
         let a = az.to_radians();
-        chart
-            .draw_series(LineSeries::new(
-                vec![(0.0, 0.0), (a.sin(), a.cos())],
-                BLACK.mix(0.15),
-            ))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                label.to_string(),
-                (1.07 * a.sin() - 0.03, 1.07 * a.cos() + 0.02),
-                ("sans-serif", 16),
-            )))
-            .map_err(err)?;
+        chart.draw_series(LineSeries::new(
+            vec![(0.0, 0.0), (a.sin(), a.cos())],
+            BLACK.mix(0.15),
+        ))?;
+        chart.draw_series(std::iter::once(Text::new(
+            label.to_string(),
+            (1.07 * a.sin() - 0.03, 1.07 * a.cos() + 0.02),
+            ("sans-serif", 16),
+        )))?;
     }
+    Ok(())
+}
+
+/// Each satellite's track: bright dots while tracked, faint ones otherwise, its PRN at the
+/// end.
+fn draw_sky_tracks(chart: &mut SkyChart<'_, '_>, record: &FlightRecord) -> SkyResult {
     let mut prns: Vec<u8> = record.sky.iter().map(|p| p.prn).collect();
     prns.sort_unstable();
     prns.dedup();
@@ -364,26 +395,21 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
                 (r * p.azimuth.sin(), r * p.azimuth.cos(), p.tracked)
             })
             .collect();
-        chart
-            .draw_series(pts.iter().map(|&(x, y, tracked)| {
-                if tracked {
-                    Circle::new((x, y), 2, color.filled())
-                } else {
-                    Circle::new((x, y), 1, color.mix(0.4).filled())
-                }
-            }))
-            .map_err(err)?;
+        chart.draw_series(pts.iter().map(|&(x, y, tracked)| {
+            if tracked {
+                Circle::new((x, y), 2, color.filled())
+            } else {
+                Circle::new((x, y), 1, color.mix(0.4).filled())
+            }
+        }))?;
         if let Some(&(x, y, _)) = pts.last() {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    format!("{prn}"),
-                    (x + 0.01, y + 0.01),
-                    ("sans-serif", 13),
-                )))
-                .map_err(err)?;
+            chart.draw_series(std::iter::once(Text::new(
+                format!("{prn}"),
+                (x + 0.01, y + 0.01),
+                ("sans-serif", 13),
+            )))?;
         }
     }
-    root.present().map_err(err)?;
     Ok(())
 }
 

@@ -210,6 +210,8 @@ fn interpolate(a: &GpsView, b: &GpsView, f: f64) -> GpsView {
     v
 }
 
+/// Two estimates closer than this are of the same epoch, s.
+const SAME_EPOCH_S: f64 = 1e-9;
 /// Gyro increments per call (two-sample propagation).
 const GYRO_SUBSAMPLES: usize = 2;
 /// Duration of an injected cycle slip (the carrier turns by one cycle over it), s.
@@ -668,20 +670,12 @@ fn record_sample(
         ),
         None => (nan3(), false),
     };
-    // the bound over the satellites the receiver can use (tracked on all three antennas)
-    let c_ib = world.c_ib(t);
-    let usable: Vec<(Vector3<f64>, f64)> = truths
-        .iter()
-        .filter(|s| s.visible == [true, true, true])
-        .map(|s| (c_ib.transpose() * s.view.los, s.cn0_dbhz[0]))
-        .collect();
-    let positions = world.antennas.map(|a| a.position);
-    let bound = bound_rad(
-        &positions,
-        &usable,
+    let bound = bound_now(
+        world,
+        truths,
+        t,
         f64::from(receiver.config().fine.loop_bandwidth_hz),
-    )
-    .unwrap_or_else(nan3);
+    );
     let h = att.health;
     let b = gyro.current_errors();
     let est = receiver.gyro_bias();
@@ -716,19 +710,41 @@ fn record_sample(
         blocked: h.antenna_blocked,
         bias_error,
     });
+    record_stages(record, receiver, world);
+}
+
+/// The bound at `t` over the satellites the receiver can use (tracked on all three antennas),
+/// rad per body axis (NaN when it is singular).
+fn bound_now(world: &World, truths: &[SatTruth], t: f64, bandwidth_hz: f64) -> Vector3<f64> {
+    let c_ib = world.c_ib(t);
+    let usable: Vec<(Vector3<f64>, f64)> = truths
+        .iter()
+        .filter(|s| s.visible == [true, true, true])
+        .map(|s| (c_ib.transpose() * s.view.los, s.cn0_dbhz[0]))
+        .collect();
+    let positions = world.antennas.map(|a| a.position);
+    bound_rad(&positions, &usable, bandwidth_hz).unwrap_or_else(nan3)
+}
+
+/// The snapshot and rigid-body estimates, each once per epoch of its own.
+fn record_stages(record: &mut FlightRecord, receiver: &AttitudeReceiver, world: &World) {
     if let Some(s) = receiver.snapshot_estimate() {
         let t = (s.epoch as f64 + 0.5) * EPOCH_S;
         if record
             .snapshots
             .last()
-            .is_none_or(|l| (l.t - t).abs() > 1e-9)
+            .is_none_or(|l| (l.t - t).abs() > SAME_EPOCH_S)
         {
             record.snapshots.push(stage_error(world, &s));
         }
     }
     if let Some(s) = receiver.rigid_body_estimate() {
         let t = (s.epoch as f64 + 0.5) * EPOCH_S;
-        if record.rigid.last().is_none_or(|l| (l.t - t).abs() > 1e-9) {
+        if record
+            .rigid
+            .last()
+            .is_none_or(|l| (l.t - t).abs() > SAME_EPOCH_S)
+        {
             record.rigid.push(stage_error(world, &s));
         }
     }

@@ -16,6 +16,14 @@ pub fn write_files(
 ) -> anyhow::Result<Vec<std::path::PathBuf>> {
     let stem = format!("one_stage_{}", variant.replace('.', "_"));
     let csv = dir.join(format!("{stem}_run0.csv"));
+    write_run0_csv(&csv, gauss, cg)?;
+    let png = dir.join(format!("{stem}_error.png"));
+    plot_run0(&png, variant, path, gauss, cg, iq_gauss, bound)?;
+    Ok(vec![csv, png])
+}
+
+/// Run 0 of both filter forms, epoch by epoch.
+fn write_run0_csv(csv: &std::path::Path, gauss: &RunResult, cg: &RunResult) -> anyhow::Result<()> {
     write_csv(
         &csv,
         &[
@@ -40,7 +48,19 @@ pub fn write_files(
                 f64::from(b.status),
             ]
         }),
-    )?;
+    )
+}
+
+/// The errors of run 0 against the bound, and the alignment.
+fn plot_run0(
+    png: &std::path::Path,
+    variant: &str,
+    path: &str,
+    gauss: &RunResult,
+    cg: &RunResult,
+    iq_gauss: Option<&RunResult>,
+    bound: f64,
+) -> anyhow::Result<()> {
     let pts = |r: &RunResult, f: fn(&Sample) -> f64| -> Vec<(f64, f64)> {
         r.samples.iter().map(|s| (s.t, f(s))).collect()
     };
@@ -83,12 +103,10 @@ pub fn write_files(
             ],
         },
     ];
-    let png = dir.join(format!("{stem}_error.png"));
     plot_panels(
-        &png,
+        png,
         &format!("one-stage {variant}: tracking error of β ({path}), run 0"),
         "time (s)",
         &panels,
-    )?;
-    Ok(vec![csv, png])
+    )
 }
