@@ -158,7 +158,7 @@ pub fn find_field(fields: &'static [Field], name: &str) -> Option<&'static Field
 
 /// Declares a metrics struct: `#[derive(Clone, Debug, Serialize)]` plus its [`Describe`]
 /// impl, one [`Field`] per field from the field's doc comment and its `#[metric(..)]`
-/// attribute:
+/// attribute (written on the field's line: one line per metric):
 ///
 /// * `#[metric(unit = "rad")]`: a value with its unit (`unit = ""` for none);
 /// * `#[metric(unit = "rad", rename = "json name")]`: the same under another JSON name;
@@ -177,8 +177,7 @@ pub fn find_field(fields: &'static [Field], name: &str) -> Option<&'static Field
 ///     /// Example metrics.
 ///     pub struct Example {
 ///         /// Attitude error RMS.
-///         #[metric(unit = "rad")]
-///         pub rms_rad: f64,
+///         #[metric(unit = "rad")] pub rms_rad: f64,
 ///     }
 /// }
 /// use host_sim::outcome::Describe;
@@ -252,11 +251,9 @@ mod tests {
         /// Inner group.
         pub struct Inner {
             /// A count.
-            #[metric(unit = "")]
-            pub count: usize,
+            #[metric(unit = "")] pub count: usize,
             /// Time it took.
-            #[metric(wall = "s")]
-            pub wall_s: f64,
+            #[metric(wall = "s")] pub wall_s: f64,
         }
     }
 
@@ -265,19 +262,13 @@ mod tests {
         pub struct Outer {
             /// An error,
             /// over two lines.
-            #[metric(unit = "rad", rename = "error rad")]
-            pub error: f64,
+            #[metric(unit = "rad", rename = "error rad")] pub error: f64,
             /// A group.
-            #[metric(nested)]
-            pub group: Inner,
+            #[metric(nested)] pub group: Inner,
             /// A flattened group.
-            #[metric(flatten)]
-            #[serde(flatten)]
-            pub extra: Option<Inner>,
+            #[metric(flatten)] #[serde(flatten)] pub extra: Option<Inner>,
             /// The same group again, suffixed.
-            #[metric(suffixed = "_again")]
-            #[serde(flatten)]
-            pub again: Suffixed<Inner>,
+            #[metric(suffixed = "_again")] #[serde(flatten)] pub again: Suffixed<Inner>,
         }
     }
 

@@ -248,11 +248,9 @@ mod tests {
         /// A record.
         pub struct Item {
             /// Its name.
-            #[metric(unit = "")]
-            pub name: String,
+            #[metric(unit = "")] pub name: String,
             /// When.
-            #[metric(unit = "s")]
-            pub at_s: f64,
+            #[metric(unit = "s")] pub at_s: f64,
         }
     }
 
@@ -260,17 +258,13 @@ mod tests {
         /// Test metrics.
         pub struct Example {
             /// An error | with a bar.
-            #[metric(unit = "rad")]
-            pub err_rad: [f64; 2],
+            #[metric(unit = "rad")] pub err_rad: [f64; 2],
             /// A count.
-            #[metric(unit = "")]
-            pub count: usize,
+            #[metric(unit = "")] pub count: usize,
             /// Records.
-            #[metric(nested)]
-            pub items: Vec<Item>,
+            #[metric(nested)] pub items: Vec<Item>,
             /// Took.
-            #[metric(wall = "s")]
-            pub wall_s: f64,
+            #[metric(wall = "s")] pub wall_s: f64,
         }
     }
 

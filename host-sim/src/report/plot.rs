@@ -169,22 +169,14 @@ pub fn plot_panels(
 
 /// The ten distinct colours of the Tableau 10 palette (legible on white, unlike the pale
 /// entries of plotters' `Palette99`).
-const PALETTE: [(u8, u8, u8); 10] = [
-    (31, 119, 180),
-    (255, 127, 14),
-    (44, 160, 44),
-    (214, 39, 40),
-    (148, 103, 189),
-    (140, 86, 75),
-    (227, 119, 194),
-    (127, 127, 127),
-    (188, 189, 34),
-    (23, 190, 207),
+const PALETTE: [u32; 10] = [
+    0x1f77b4, 0xff7f0e, 0x2ca02c, 0xd62728, 0x9467bd, 0x8c564b, 0xe377c2, 0x7f7f7f, 0xbcbd22,
+    0x17becf,
 ];
 
 /// Colour `i` of [`PALETTE`] (repeating).
 pub fn palette(i: usize) -> RGBAColor {
-    let (r, g, b) = PALETTE[i % PALETTE.len()];
+    let [_, r, g, b] = PALETTE[i % PALETTE.len()].to_be_bytes();
     RGBColor(r, g, b).to_rgba()
 }
 

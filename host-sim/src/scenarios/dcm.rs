@@ -42,26 +42,26 @@ type MakeSetup = fn() -> anyhow::Result<Setup>;
 /// The variants: each builds its set-up.
 const VARIANTS: Variants<MakeSetup> = Variants {
     list: &[
-        Variant {
-            name: "paper",
-            about: "the paper's Example, literal noise (0.6 m, 0.1 m/s per sample)",
-            config: paper_setup,
-        },
-        Variant {
-            name: "intensity",
-            about: "the same with the 'intensity' reading (0.06 m, 0.01 m/s)",
-            config: intensity_setup,
-        },
-        Variant {
-            name: "wide",
-            about: "b23 = (1.7, -1.7, 2.0) m: non-degenerate geometry, intensity noise",
-            config: wide_setup,
-        },
-        Variant {
-            name: "leo",
-            about: "nadir pointing at orbital rate, 1 m baselines: where the Doppler stops helping",
-            config: leo_setup,
-        },
+        Variant::new(
+            "paper",
+            "the paper's Example, literal noise (0.6 m, 0.1 m/s per sample)",
+            paper_setup,
+        ),
+        Variant::new(
+            "intensity",
+            "the same with the 'intensity' reading (0.06 m, 0.01 m/s)",
+            intensity_setup,
+        ),
+        Variant::new(
+            "wide",
+            "b23 = (1.7, -1.7, 2.0) m: non-degenerate geometry, intensity noise",
+            wide_setup,
+        ),
+        Variant::new(
+            "leo",
+            "nadir pointing at orbital rate, 1 m baselines: where the Doppler stops helping",
+            leo_setup,
+        ),
     ],
     run: |setup, ctx| run_setup(ctx, setup()?, RUNS, DURATION),
 };

@@ -50,31 +50,31 @@ pub const SCENARIO: Scenario = Scenario {
     about: "Gyro calibration by sequential least squares against a reference attitude (paper 001)",
     variants: &Variants {
         list: &[
-            Variant {
-                name: "exact",
-                about: "§6: float increments, no quantization",
-                config: Plan::Section6(Input::Exact),
-            },
-            Variant {
-                name: "quantized",
-                about: "§6: pulses of σ = 2e-5 rad, no centering",
-                config: Plan::Section6(Input::Pulses(ResidualCentering::None)),
-            },
-            Variant {
-                name: "centered-5.5",
-                about: "§6: pulses, residual centered in the equations, eq. (5.5)",
-                config: Plan::Section6(Input::Pulses(ResidualCentering::MeanResidual)),
-            },
-            Variant {
-                name: "centered-5.6",
-                about: "§6: pulses, increments centered before integration, eq. (5.6)",
-                config: Plan::Section6(Input::Pulses(ResidualCentering::IncrementCorrection)),
-            },
-            Variant {
-                name: "gnss-ref",
-                about: "tumbling microsatellite, MEMS gyro, 0.05° GNSS attitude at 10 Hz, 10 min",
-                config: Plan::GnssReference,
-            },
+            Variant::new(
+                "exact",
+                "§6: float increments, no quantization",
+                Plan::Section6(Input::Exact),
+            ),
+            Variant::new(
+                "quantized",
+                "§6: pulses of σ = 2e-5 rad, no centering",
+                Plan::Section6(Input::Pulses(ResidualCentering::None)),
+            ),
+            Variant::new(
+                "centered-5.5",
+                "§6: pulses, residual centered in the equations, eq. (5.5)",
+                Plan::Section6(Input::Pulses(ResidualCentering::MeanResidual)),
+            ),
+            Variant::new(
+                "centered-5.6",
+                "§6: pulses, increments centered before integration, eq. (5.6)",
+                Plan::Section6(Input::Pulses(ResidualCentering::IncrementCorrection)),
+            ),
+            Variant::new(
+                "gnss-ref",
+                "tumbling microsatellite, MEMS gyro, 0.05° GNSS attitude at 10 Hz, 10 min",
+                Plan::GnssReference,
+            ),
         ],
         run: |plan, ctx| match *plan {
             Plan::Section6(input) => run_section6(ctx, input),
@@ -294,80 +294,55 @@ crate::metrics! {
     /// Metrics of the §6 variants of `gyro-cal` (errors are estimate − truth).
     pub struct Section6Metrics {
         /// Error of the gyro parameters c₁…₉ (scale factors, misalignments, biases), f32 Givens.
-        #[metric(unit = "1, 1, 1, rad, rad, rad, 1/s, 1/s, 1/s")]
-        pub dc: Vec<f64>,
+        #[metric(unit = "1, 1, 1, rad, rad, rad, 1/s, 1/s, 1/s")] pub dc: Vec<f64>,
         /// Error of the reference drift d.
-        #[metric(unit = "1/s")]
-        pub dd: Vec<f64>,
+        #[metric(unit = "1/s")] pub dd: Vec<f64>,
         /// Post-correction attitude error (half-angle vector).
-        #[metric(unit = "")]
-        pub w_post: Vec<f64>,
+        #[metric(unit = "")] pub w_post: Vec<f64>,
         /// Rank of the f32 Givens solve.
-        #[metric(unit = "")]
-        pub rank: usize,
+        #[metric(unit = "")] pub rank: usize,
         /// Condition number of the f32 Givens solve.
-        #[metric(unit = "")]
-        pub cond: f64,
+        #[metric(unit = "")] pub cond: f64,
         /// c error of the f64 solve of the same equations.
-        #[metric(unit = "as dc")]
-        pub dc_f64: Vec<f64>,
+        #[metric(unit = "as dc")] pub dc_f64: Vec<f64>,
         /// d error of the f64 solve.
-        #[metric(unit = "1/s")]
-        pub dd_f64: Vec<f64>,
+        #[metric(unit = "1/s")] pub dd_f64: Vec<f64>,
         /// Attitude error of the f64 solve.
-        #[metric(unit = "")]
-        pub w_post_f64: Vec<f64>,
+        #[metric(unit = "")] pub w_post_f64: Vec<f64>,
         /// Largest over the groups (c₁…₆, c₇…₉, d, w_post) of ‖f32 Givens − f64‖ / ‖f64 − truth‖.
-        #[metric(unit = "")]
-        pub givens_f32_dev_ratio: f64,
+        #[metric(unit = "")] pub givens_f32_dev_ratio: f64,
         /// The same for the f32 normal equations (the paper's eq. (5.8)).
-        #[metric(unit = "")]
-        pub normal_f32_dev_ratio: f64,
+        #[metric(unit = "")] pub normal_f32_dev_ratio: f64,
         /// c error of the f32 normal equations.
-        #[metric(unit = "as dc")]
-        pub dc_normal_f32: Vec<f64>,
+        #[metric(unit = "as dc")] pub dc_normal_f32: Vec<f64>,
         /// d error of the f32 normal equations.
-        #[metric(unit = "1/s")]
-        pub dd_normal_f32: Vec<f64>,
+        #[metric(unit = "1/s")] pub dd_normal_f32: Vec<f64>,
         /// Attitude error of the f32 normal equations.
-        #[metric(unit = "")]
-        pub w_post_normal_f32: Vec<f64>,
+        #[metric(unit = "")] pub w_post_normal_f32: Vec<f64>,
         /// Rank of the f32 normal equations.
-        #[metric(unit = "")]
-        pub rank_normal_f32: usize,
+        #[metric(unit = "")] pub rank_normal_f32: usize,
         /// Condition number of the f32 normal equations.
-        #[metric(unit = "")]
-        pub cond_normal_f32: f64,
+        #[metric(unit = "")] pub cond_normal_f32: f64,
         /// c error of the whole pipeline run in f64.
-        #[metric(unit = "as dc")]
-        pub dc_f64_pipeline: Vec<f64>,
+        #[metric(unit = "as dc")] pub dc_f64_pipeline: Vec<f64>,
         /// d error of the f64 pipeline.
-        #[metric(unit = "1/s")]
-        pub dd_f64_pipeline: Vec<f64>,
+        #[metric(unit = "1/s")] pub dd_f64_pipeline: Vec<f64>,
         /// Attitude error of the f64 pipeline.
-        #[metric(unit = "")]
-        pub w_post_f64_pipeline: Vec<f64>,
+        #[metric(unit = "")] pub w_post_f64_pipeline: Vec<f64>,
         /// Formal standard deviations of c (f32 Givens).
-        #[metric(unit = "as dc")]
-        pub c_std: Vec<f64>,
+        #[metric(unit = "as dc")] pub c_std: Vec<f64>,
         /// Formal standard deviations of d.
-        #[metric(unit = "1/s")]
-        pub d_std: Vec<f64>,
+        #[metric(unit = "1/s")] pub d_std: Vec<f64>,
         /// Unit-weight standard deviation of the fit.
-        #[metric(unit = "")]
-        pub sigma0: f64,
+        #[metric(unit = "")] pub sigma0: f64,
         /// Singular values of the equilibrated design.
-        #[metric(unit = "")]
-        pub singular_values: Vec<f64>,
+        #[metric(unit = "")] pub singular_values: Vec<f64>,
         /// Reference epochs whose equations were used.
-        #[metric(unit = "")]
-        pub epochs_used: u32,
+        #[metric(unit = "")] pub epochs_used: u32,
         /// Reference epochs skipped (small p₀ or gimbal lock).
-        #[metric(unit = "")]
-        pub epochs_skipped: u32,
+        #[metric(unit = "")] pub epochs_skipped: u32,
         /// Equation rows accumulated.
-        #[metric(unit = "")]
-        pub rows: u32,
+        #[metric(unit = "")] pub rows: u32,
     }
 }
 

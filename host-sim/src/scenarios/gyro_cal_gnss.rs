@@ -239,44 +239,31 @@ crate::metrics! {
     /// Monte Carlo figures of one set of runs (RMS over the runs unless named otherwise).
     pub struct Summary {
         /// RMS error of c₁…₉ per parameter.
-        #[metric(unit = "1, 1, 1, rad, rad, rad, rad/s, rad/s, rad/s", rename = "dc_rms_mc")]
-        pub dc_rms: Vec<f64>,
+        #[metric(unit = "1, 1, 1, rad, rad, rad, rad/s, rad/s, rad/s", rename = "dc_rms_mc")] pub dc_rms: Vec<f64>,
         /// RMS of the estimated drift d per axis.
-        #[metric(unit = "rad/s", rename = "dd_rms_mc")]
-        pub dd_rms: Vec<f64>,
+        #[metric(unit = "rad/s", rename = "dd_rms_mc")] pub dd_rms: Vec<f64>,
         /// Mean formal standard deviation of c₁…₉.
-        #[metric(unit = "as dc_rms_mc", rename = "c_std_mean_mc")]
-        pub c_std_mean: Vec<f64>,
+        #[metric(unit = "as dc_rms_mc", rename = "c_std_mean_mc")] pub c_std_mean: Vec<f64>,
         /// Scale-factor error.
-        #[metric(unit = "ppm", rename = "scale_err_ppm_rms")]
-        pub scale_ppm: f64,
+        #[metric(unit = "ppm", rename = "scale_err_ppm_rms")] pub scale_ppm: f64,
         /// Misalignment error.
-        #[metric(unit = "µrad", rename = "misalignment_err_urad_rms")]
-        pub misalign_urad: f64,
+        #[metric(unit = "µrad", rename = "misalignment_err_urad_rms")] pub misalign_urad: f64,
         /// Bias error.
-        #[metric(unit = "°/h", rename = "bias_err_deg_per_h_rms")]
-        pub bias_deg_h: f64,
+        #[metric(unit = "°/h", rename = "bias_err_deg_per_h_rms")] pub bias_deg_h: f64,
         /// Drift error.
-        #[metric(unit = "°/h", rename = "drift_err_deg_per_h_rms")]
-        pub drift_deg_h: f64,
+        #[metric(unit = "°/h", rename = "drift_err_deg_per_h_rms")] pub drift_deg_h: f64,
         /// Rate error along the motion without calibration.
-        #[metric(unit = "°/h", rename = "rate_err_deg_per_h_raw_rms")]
-        pub rate_raw: f64,
+        #[metric(unit = "°/h", rename = "rate_err_deg_per_h_raw_rms")] pub rate_raw: f64,
         /// Rate error along the motion after calibration.
-        #[metric(unit = "°/h", rename = "rate_err_deg_per_h_calibrated_rms")]
-        pub rate_cal: f64,
+        #[metric(unit = "°/h", rename = "rate_err_deg_per_h_calibrated_rms")] pub rate_cal: f64,
         /// Attitude error after a 60 s coast on the raw gyro.
-        #[metric(unit = "deg", rename = "coast60_err_deg_raw_rms")]
-        pub coast_raw: f64,
+        #[metric(unit = "deg", rename = "coast60_err_deg_raw_rms")] pub coast_raw: f64,
         /// Attitude error after a 60 s coast on the calibrated gyro.
-        #[metric(unit = "deg", rename = "coast60_err_deg_calibrated_rms")]
-        pub coast_cal: f64,
+        #[metric(unit = "deg", rename = "coast60_err_deg_calibrated_rms")] pub coast_cal: f64,
         /// Attitude error at the end of the calibration span.
-        #[metric(unit = "rad", rename = "w_post_rms")]
-        pub w_post: f64,
+        #[metric(unit = "rad", rename = "w_post_rms")] pub w_post: f64,
         /// Largest over the runs of max|ĉ₃₂ − ĉ₆₄| / max|ĉ₆₄ − c|.
-        #[metric(unit = "", rename = "f32_vs_f64_over_error_max")]
-        pub f32_vs_f64: f64,
+        #[metric(unit = "", rename = "f32_vs_f64_over_error_max")] pub f32_vs_f64: f64,
     }
 }
 
@@ -284,64 +271,43 @@ crate::metrics! {
     /// Metrics of `gyro-cal --variant gnss-ref` (run 0 unless named `_mc` or `_rms`).
     pub struct Metrics {
         /// Error of c₁…₉ (scale factors, misalignments, biases), f32.
-        #[metric(unit = "1, 1, 1, rad, rad, rad, rad/s, rad/s, rad/s")]
-        pub dc: Vec<f64>,
+        #[metric(unit = "1, 1, 1, rad, rad, rad, rad/s, rad/s, rad/s")] pub dc: Vec<f64>,
         /// Estimated drift d of the reference.
-        #[metric(unit = "rad/s")]
-        pub dd: Vec<f64>,
+        #[metric(unit = "rad/s")] pub dd: Vec<f64>,
         /// Attitude error at the end of the span (half-angle vector).
-        #[metric(unit = "")]
-        pub w_post: Vec<f64>,
+        #[metric(unit = "")] pub w_post: Vec<f64>,
         /// Rank of the last solve.
-        #[metric(unit = "")]
-        pub rank: usize,
+        #[metric(unit = "")] pub rank: usize,
         /// Condition number of the last solve.
-        #[metric(unit = "")]
-        pub cond: f64,
+        #[metric(unit = "")] pub cond: f64,
         /// Condition number after equilibration.
-        #[metric(unit = "")]
-        pub cond_equilibrated: f64,
+        #[metric(unit = "")] pub cond_equilibrated: f64,
         /// c error of the f64 run.
-        #[metric(unit = "as dc")]
-        pub dc_f64: Vec<f64>,
+        #[metric(unit = "as dc")] pub dc_f64: Vec<f64>,
         /// d of the f64 run.
-        #[metric(unit = "rad/s")]
-        pub dd_f64: Vec<f64>,
+        #[metric(unit = "rad/s")] pub dd_f64: Vec<f64>,
         /// Attitude error of the f64 run.
-        #[metric(unit = "")]
-        pub w_post_f64: Vec<f64>,
+        #[metric(unit = "")] pub w_post_f64: Vec<f64>,
         /// True c averaged over the span (the biases walk).
-        #[metric(unit = "as dc")]
-        pub c_true_mean: Vec<f64>,
+        #[metric(unit = "as dc")] pub c_true_mean: Vec<f64>,
         /// Formal standard deviations of c.
-        #[metric(unit = "as dc")]
-        pub c_std: Vec<f64>,
+        #[metric(unit = "as dc")] pub c_std: Vec<f64>,
         /// Formal standard deviations of d.
-        #[metric(unit = "rad/s")]
-        pub d_std: Vec<f64>,
+        #[metric(unit = "rad/s")] pub d_std: Vec<f64>,
         /// Monte Carlo runs.
-        #[metric(unit = "")]
-        pub runs: usize,
+        #[metric(unit = "")] pub runs: usize,
         /// The Monte Carlo with the MEMS random walks.
-        #[metric(flatten)]
-        #[serde(flatten)]
-        pub mc: Summary,
+        #[metric(flatten)] #[serde(flatten)] pub mc: Summary,
         /// The Monte Carlo without the angle and bias random walks.
-        #[metric(suffixed = "_no_random_walk")]
-        #[serde(flatten)]
-        pub mc_no_random_walk: Suffixed<Summary>,
+        #[metric(suffixed = "_no_random_walk")] #[serde(flatten)] pub mc_no_random_walk: Suffixed<Summary>,
         /// Solves over the span (one per re-linearization).
-        #[metric(unit = "")]
-        pub solves: usize,
+        #[metric(unit = "")] pub solves: usize,
         /// Interval between re-linearizations.
-        #[metric(unit = "s")]
-        pub relinearize_s: f64,
+        #[metric(unit = "s")] pub relinearize_s: f64,
         /// Reference epochs used.
-        #[metric(unit = "")]
-        pub epochs_used: u32,
+        #[metric(unit = "")] pub epochs_used: u32,
         /// Reference epochs skipped.
-        #[metric(unit = "")]
-        pub epochs_skipped: u32,
+        #[metric(unit = "")] pub epochs_skipped: u32,
     }
 }
 

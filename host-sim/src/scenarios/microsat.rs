@@ -31,22 +31,17 @@ pub const SCENARIO: Scenario = Scenario {
     about: "the main job: a microsatellite in LEO, raw samples to attitude, every stage, faults",
     variants: &Variants::<MakeFlight> {
         list: &[
-            Variant {
-                name: "nadir",
-                about:
-                    "10 min, nadir pointing with a slow spin and wobble, faults (the default run)",
-                config: nadir,
-            },
-            Variant {
-                name: "detumbling",
-                about: "10 min, a detumbling body (about 3°/s at the start), faults",
-                config: detumbling,
-            },
-            Variant {
-                name: "short",
-                about: "30 s without faults (the integration test)",
-                config: short,
-            },
+            Variant::new(
+                "nadir",
+                "10 min, nadir pointing with a slow spin and wobble, faults (the default run)",
+                nadir,
+            ),
+            Variant::new(
+                "detumbling",
+                "10 min, a detumbling body (about 3°/s at the start), faults",
+                detumbling,
+            ),
+            Variant::new("short", "30 s without faults (the integration test)", short),
         ],
         run: |flight, ctx| run(&flight(ctx.seed), ctx),
     },
@@ -120,72 +115,52 @@ crate::metrics! {
     /// Metrics of `microsat` (triples are body x, y, z).
     pub struct Metrics {
         /// Time to first fix (first attitude of any source).
-        #[metric(unit = "s")]
-        pub ttff_s: f64,
+        #[metric(unit = "s")] pub ttff_s: f64,
         /// RMS error of the receiver's attitude after convergence.
-        #[metric(unit = "deg")]
-        pub rms_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub rms_err_deg: [f64; 3],
         /// Largest error after convergence.
-        #[metric(unit = "deg")]
-        pub max_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub max_err_deg: [f64; 3],
         /// Fraction of the flight with an attitude.
-        #[metric(unit = "")]
-        pub availability: f64,
+        #[metric(unit = "")] pub availability: f64,
         /// RMS of the bound √(2Δf (J⁻¹)_aa) over the converged stretch.
-        #[metric(unit = "deg")]
-        pub bound_deg: [f64; 3],
+        #[metric(unit = "deg")] pub bound_deg: [f64; 3],
         /// Each fault's detection and recovery.
-        #[metric(nested)]
-        pub faults: Vec<FaultOutcome>,
+        #[metric(nested)] pub faults: Vec<FaultOutcome>,
         /// Time the fine filter first locked.
-        #[metric(unit = "s")]
-        pub fine_lock_s: f64,
+        #[metric(unit = "s")] pub fine_lock_s: f64,
         /// Wall time of the run.
-        #[metric(wall = "s")]
-        pub wall_time_s: f64,
-        /// RMS error while the sample-level chain fed the receiver.
-        #[metric(unit = "deg")]
-        pub rms_err_samples_deg: [f64; 3],
-        /// The bound over the same stretch.
-        #[metric(unit = "deg")]
-        pub bound_samples_deg: [f64; 3],
+        #[metric(wall = "s")] pub wall_time_s: f64,
+        /// RMS error while the sample-level chain fed the receiver, after convergence.
+        #[metric(unit = "deg")] pub rms_err_samples_deg: [f64; 3],
+        /// The bound over the converged sample-level stretch (null: it ended before
+        /// convergence).
+        #[metric(unit = "deg")] pub bound_samples_deg: [f64; 3],
         /// RMS error on the fast path.
-        #[metric(unit = "deg")]
-        pub rms_err_fast_path_deg: [f64; 3],
-        /// The bound over the same stretch.
-        #[metric(unit = "deg")]
-        pub bound_fast_path_deg: [f64; 3],
+        #[metric(unit = "deg")] pub rms_err_fast_path_deg: [f64; 3],
+        /// The bound over the fast-path stretch.
+        #[metric(unit = "deg")] pub bound_fast_path_deg: [f64; 3],
         /// What the sample-level stretch did.
-        #[metric(flatten)]
-        #[serde(flatten)]
-        pub sample_level: Option<SampleLevelMetrics>,
+        #[metric(flatten)] #[serde(flatten)] pub sample_level: Option<SampleLevelMetrics>,
     }
 }
 
 crate::metrics! {
     /// The sample-level stretch at the start of the flight.
     pub struct SampleLevelMetrics {
-        /// Its length.
-        #[metric(unit = "s")]
-        pub sample_level_s: f64,
-        /// Acquisition searches.
-        #[metric(unit = "")]
-        pub sample_level_searches: usize,
-        /// Satellites found (a channel each).
-        #[metric(unit = "")]
-        pub sample_level_found: usize,
-        /// Tracking epochs that arrived after their filter epoch.
-        #[metric(unit = "")]
-        pub sample_level_late: usize,
-        /// Observations delivered.
-        #[metric(unit = "")]
-        pub sample_level_observations: usize,
-        /// Wall time of the stretch.
-        #[metric(wall = "s")]
-        pub sample_level_wall_s: f64,
+        /// Length of the stretch run from synthesized samples.
+        #[metric(unit = "s")] pub sample_level_s: f64,
+        /// Acquisition searches in the sample-level stretch.
+        #[metric(unit = "")] pub sample_level_searches: usize,
+        /// Satellites the sample-level acquisition found (a channel each).
+        #[metric(unit = "")] pub sample_level_found: usize,
+        /// Sample-level tracking epochs that arrived after their filter epoch.
+        #[metric(unit = "")] pub sample_level_late: usize,
+        /// Observations the sample-level chain delivered.
+        #[metric(unit = "")] pub sample_level_observations: usize,
+        /// Wall time of the sample-level stretch.
+        #[metric(wall = "s")] pub sample_level_wall_s: f64,
         /// Wall time of the fast path.
-        #[metric(wall = "s")]
-        pub fast_path_wall_s: f64,
+        #[metric(wall = "s")] pub fast_path_wall_s: f64,
     }
 }
 

@@ -66,6 +66,17 @@ pub struct Variants<C: 'static> {
     pub run: fn(&C, &RunContext) -> anyhow::Result<Outcome>,
 }
 
+impl<C> Variant<C> {
+    /// The variant `name` (`about` for `host-sim list`) running `config`.
+    pub const fn new(name: &'static str, about: &'static str, config: C) -> Self {
+        Self {
+            name,
+            about,
+            config,
+        }
+    }
+}
+
 impl<C> Variants<C> {
     /// The variant called `name`.
     ///

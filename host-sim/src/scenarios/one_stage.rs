@@ -75,24 +75,33 @@ const fn plan(case: Case, iq_only: bool) -> Plan {
     Plan { case, iq_only }
 }
 
+/// The `-iq` twin of a case: the I/Q fast path only.
+const fn iq(name: &'static str, case: Case) -> Variant<Plan> {
+    Variant::new(
+        name,
+        "the same case on the I/Q fast path only",
+        plan(case, true),
+    )
+}
+
 /// The scenario.
 pub const SCENARIO: Scenario = Scenario {
     name: "one-stage",
     about: "Paper 003: one-stage attitude filter from three-antenna samples (β about Y_c, geometry G1); `-iq` variants: I/Q fast path only",
     variants: &Variants {
         list: &[
-            Variant { name: "8sat-2hz", about: "8 satellites, Δf = 2 Hz, zero initial error (paper: 0.75′)", config: plan(Case::EightSat2Hz, false) },
-            Variant { name: "8sat-0.5hz", about: "8 satellites, Δf = 0.5 Hz (paper: 0.34′)", config: plan(Case::EightSatHalfHz, false) },
-            Variant { name: "2sat-2hz", about: "first 2 satellites (el 10°, 20°), Δf = 2 Hz (paper: 5.48′)", config: plan(Case::TwoSat2Hz, false) },
-            Variant { name: "8sat-2hz-init5deg", about: "8 satellites, Δf = 2 Hz, 5° initial error (paper: 0.77′ steady state)", config: plan(Case::Init5Deg, false) },
-            Variant { name: "dynamic", about: "8 satellites, Δf = 2 Hz, motion A: β̇ = (a0/V0) sin νt (stress test)", config: plan(Case::Dynamic, false) },
-            Variant { name: "linebias", about: "8 satellites, Δf = 2 Hz, unknown line biases, with and without bias states", config: plan(Case::LineBias, false) },
-            Variant { name: "8sat-2hz-iq", about: "8sat-2hz on the I/Q fast path only", config: plan(Case::EightSat2Hz, true) },
-            Variant { name: "8sat-0.5hz-iq", about: "8sat-0.5hz on the I/Q fast path only", config: plan(Case::EightSatHalfHz, true) },
-            Variant { name: "2sat-2hz-iq", about: "2sat-2hz on the I/Q fast path only", config: plan(Case::TwoSat2Hz, true) },
-            Variant { name: "8sat-2hz-init5deg-iq", about: "8sat-2hz-init5deg on the I/Q fast path only", config: plan(Case::Init5Deg, true) },
-            Variant { name: "dynamic-iq", about: "dynamic on the I/Q fast path only", config: plan(Case::Dynamic, true) },
-            Variant { name: "linebias-iq", about: "linebias on the I/Q fast path only", config: plan(Case::LineBias, true) },
+            Variant::new("8sat-2hz", "8 satellites, Δf = 2 Hz, zero initial error (paper: 0.75′)", plan(Case::EightSat2Hz, false)),
+            Variant::new("8sat-0.5hz", "8 satellites, Δf = 0.5 Hz (paper: 0.34′)", plan(Case::EightSatHalfHz, false)),
+            Variant::new("2sat-2hz", "first 2 satellites (el 10°, 20°), Δf = 2 Hz (paper: 5.48′)", plan(Case::TwoSat2Hz, false)),
+            Variant::new("8sat-2hz-init5deg", "8 satellites, Δf = 2 Hz, 5° initial error (paper: 0.77′ steady state)", plan(Case::Init5Deg, false)),
+            Variant::new("dynamic", "8 satellites, Δf = 2 Hz, motion A: β̇ = (a0/V0) sin νt (stress test)", plan(Case::Dynamic, false)),
+            Variant::new("linebias", "8 satellites, Δf = 2 Hz, unknown line biases, with and without bias states", plan(Case::LineBias, false)),
+            iq("8sat-2hz-iq", Case::EightSat2Hz),
+            iq("8sat-0.5hz-iq", Case::EightSatHalfHz),
+            iq("2sat-2hz-iq", Case::TwoSat2Hz),
+            iq("8sat-2hz-init5deg-iq", Case::Init5Deg),
+            iq("dynamic-iq", Case::Dynamic),
+            iq("linebias-iq", Case::LineBias),
         ],
         run: |plan, ctx| run(*plan, ctx),
     },
@@ -176,86 +185,57 @@ crate::metrics! {
     /// `*_iq` from the I/Q fast path's Monte Carlo.
     pub struct Metrics {
         /// RMS of β̂ − β, Gaussian-approximation filter.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin: f64,
         /// Loop-limited bound √(2Δf/J_β) for the same geometry.
-        #[metric(unit = "arcmin")]
-        pub bound_arcmin: f64,
+        #[metric(unit = "arcmin")] pub bound_arcmin: f64,
         /// Time after which |β̂ − β| stays within 5 × bound (worst run; null: never).
-        #[metric(unit = "s")]
-        pub pull_in_s: Option<f64>,
+        #[metric(unit = "s")] pub pull_in_s: Option<f64>,
         /// A run that did not pull in or was not locked at the end.
-        #[metric(unit = "")]
-        pub false_lock: bool,
+        #[metric(unit = "")] pub false_lock: bool,
         /// Where the headline comes from: `samples` or `iq`.
-        #[metric(unit = "")]
-        pub input_path: &'static str,
+        #[metric(unit = "")] pub input_path: &'static str,
         /// Runs behind the headline.
-        #[metric(unit = "")]
-        pub runs: usize,
+        #[metric(unit = "")] pub runs: usize,
         /// σ_β of the Gaussian-approximation filter.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_gaussian: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_gaussian: f64,
         /// σ_β of the constant-gain filter.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_constant_gain: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_constant_gain: f64,
         /// Pull-in time, Gaussian.
-        #[metric(unit = "s")]
-        pub pull_in_s_gaussian: Option<f64>,
+        #[metric(unit = "s")] pub pull_in_s_gaussian: Option<f64>,
         /// Pull-in time, constant gain.
-        #[metric(unit = "s")]
-        pub pull_in_s_constant_gain: Option<f64>,
+        #[metric(unit = "s")] pub pull_in_s_constant_gain: Option<f64>,
         /// When the lock detector declared lock, Gaussian (worst run).
-        #[metric(unit = "s")]
-        pub lock_declared_s_gaussian: Option<f64>,
+        #[metric(unit = "s")] pub lock_declared_s_gaussian: Option<f64>,
         /// When the lock detector declared lock, constant gain.
-        #[metric(unit = "s")]
-        pub lock_declared_s_constant_gain: Option<f64>,
+        #[metric(unit = "s")] pub lock_declared_s_constant_gain: Option<f64>,
         /// False lock of the constant-gain filter.
-        #[metric(unit = "")]
-        pub false_lock_constant_gain: bool,
+        #[metric(unit = "")] pub false_lock_constant_gain: bool,
         /// Runs in which the detector flagged a false lock, Gaussian.
-        #[metric(unit = "")]
-        pub flagged_runs_gaussian: usize,
+        #[metric(unit = "")] pub flagged_runs_gaussian: usize,
         /// Runs in which the detector flagged a false lock, constant gain.
-        #[metric(unit = "")]
-        pub flagged_runs_constant_gain: usize,
+        #[metric(unit = "")] pub flagged_runs_constant_gain: usize,
         /// σ_β over the bound.
-        #[metric(unit = "")]
-        pub sigma_over_bound: f64,
+        #[metric(unit = "")] pub sigma_over_bound: f64,
         /// σ_β on the I/Q fast path, Gaussian.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_iq: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_iq: f64,
         /// σ_β on the I/Q fast path, constant gain.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_constant_gain_iq: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_constant_gain_iq: f64,
         /// Pull-in time on the I/Q fast path (worst run).
-        #[metric(unit = "s")]
-        pub pull_in_s_iq: Option<f64>,
+        #[metric(unit = "s")] pub pull_in_s_iq: Option<f64>,
         /// False lock of either filter form on the I/Q fast path.
-        #[metric(unit = "")]
-        pub false_lock_iq: bool,
+        #[metric(unit = "")] pub false_lock_iq: bool,
         /// I/Q Monte Carlo runs per configuration.
-        #[metric(unit = "")]
-        pub runs_iq: usize,
+        #[metric(unit = "")] pub runs_iq: usize,
         /// Relative standard deviation of one run's σ over the I/Q runs.
-        #[metric(unit = "")]
-        pub sigma_run_spread_iq: f64,
+        #[metric(unit = "")] pub sigma_run_spread_iq: f64,
         /// Carrier wavelength (GPS L1).
-        #[metric(unit = "m")]
-        pub wavelength_m: f64,
+        #[metric(unit = "m")] pub wavelength_m: f64,
         /// The sample-level path against the I/Q fast path (sample-level variants).
-        #[metric(flatten)]
-        #[serde(flatten)]
-        pub paths: Option<PathComparison>,
+        #[metric(flatten)] #[serde(flatten)] pub paths: Option<PathComparison>,
         /// All three angles estimated (the paper's cases).
-        #[metric(flatten)]
-        #[serde(flatten)]
-        pub three_axis: Option<ThreeAxis>,
+        #[metric(flatten)] #[serde(flatten)] pub three_axis: Option<ThreeAxis>,
         /// Without line-bias states (`linebias`).
-        #[metric(flatten)]
-        #[serde(flatten)]
-        pub line_bias: Option<LineBiasFigures>,
+        #[metric(flatten)] #[serde(flatten)] pub line_bias: Option<LineBiasFigures>,
     }
 }
 
@@ -264,56 +244,39 @@ crate::metrics! {
     /// delivers, wall time.
     pub struct PathComparison {
         /// σ_β from samples over σ_β on the I/Q path.
-        #[metric(unit = "")]
-        pub sigma_ratio_samples_to_iq: f64,
+        #[metric(unit = "")] pub sigma_ratio_samples_to_iq: f64,
         /// Fisher information of β per epoch from samples against the ideal `J_β T`.
-        #[metric(unit = "dB")]
-        pub information_loss_db_samples: f64,
+        #[metric(unit = "dB")] pub information_loss_db_samples: f64,
         /// The same on the I/Q fast path.
-        #[metric(unit = "dB")]
-        pub information_loss_db_iq: f64,
+        #[metric(unit = "dB")] pub information_loss_db_iq: f64,
         /// What the fixed-point chain loses against the I/Q path.
-        #[metric(unit = "dB")]
-        pub chain_loss_db: f64,
+        #[metric(unit = "dB")] pub chain_loss_db: f64,
         /// The chain's loss below 10 Hz (50-epoch means), where the loop lives.
-        #[metric(unit = "dB")]
-        pub chain_loss_db_low_frequency: f64,
+        #[metric(unit = "dB")] pub chain_loss_db_low_frequency: f64,
         /// Loss predicted from the other satellites' cross-correlation.
-        #[metric(unit = "dB")]
-        pub cross_correlation_loss_db_predicted: f64,
+        #[metric(unit = "dB")] pub cross_correlation_loss_db_predicted: f64,
         /// Measured discriminator slope over the slope the filter expects, samples.
-        #[metric(unit = "")]
-        pub loop_gain_factor_samples: f64,
+        #[metric(unit = "")] pub loop_gain_factor_samples: f64,
         /// The same on the I/Q path.
-        #[metric(unit = "")]
-        pub loop_gain_factor_iq: f64,
+        #[metric(unit = "")] pub loop_gain_factor_iq: f64,
         /// The bound at the information the samples delivered.
-        #[metric(unit = "arcmin")]
-        pub bound_arcmin_measured_information: f64,
+        #[metric(unit = "arcmin")] pub bound_arcmin_measured_information: f64,
         /// Mean C/N0 the channels reported.
-        #[metric(unit = "dB-Hz")]
-        pub mean_cn0_reported_dbhz: f64,
+        #[metric(unit = "dB-Hz")] pub mean_cn0_reported_dbhz: f64,
         /// Satellites tracked from samples.
-        #[metric(unit = "")]
-        pub satellites_tracked: usize,
+        #[metric(unit = "")] pub satellites_tracked: usize,
         /// Filter epochs without observations.
-        #[metric(unit = "")]
-        pub empty_epochs: usize,
+        #[metric(unit = "")] pub empty_epochs: usize,
         /// Observations that arrived after their filter epoch.
-        #[metric(unit = "")]
-        pub late_epochs: usize,
+        #[metric(unit = "")] pub late_epochs: usize,
         /// Wall time of the sample-level run.
-        #[metric(wall = "s")]
-        pub sample_wall_s: f64,
-        /// Of which synthesis.
-        #[metric(wall = "s")]
-        pub sample_synthesis_s: f64,
-        /// Of which tracking.
-        #[metric(wall = "s")]
-        pub sample_tracking_s: f64,
-        /// Of which acquisition.
-        #[metric(wall = "s")]
-        pub sample_acquisition_s: f64,
+        #[metric(wall = "s")] pub sample_wall_s: f64,
+        /// Wall time of the sample synthesis.
+        #[metric(wall = "s")] pub sample_synthesis_s: f64,
+        /// Wall time of the sample-level tracking.
+        #[metric(wall = "s")] pub sample_tracking_s: f64,
+        /// Wall time of the sample-level acquisition.
+        #[metric(wall = "s")] pub sample_acquisition_s: f64,
     }
 }
 
@@ -321,17 +284,13 @@ crate::metrics! {
     /// All three angles estimated by the Gaussian filter.
     pub struct ThreeAxis {
         /// σ_β with α, β, γ estimated.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_3axis: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_3axis: f64,
         /// The same on the I/Q path.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_3axis_iq: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_3axis_iq: f64,
         /// Bound √(2Δf (J⁻¹)_ββ) (β shares information with γ).
-        #[metric(unit = "arcmin")]
-        pub bound_arcmin_3axis: f64,
+        #[metric(unit = "arcmin")] pub bound_arcmin_3axis: f64,
         /// False lock of the three-angle filter.
-        #[metric(unit = "")]
-        pub false_lock_3axis: bool,
+        #[metric(unit = "")] pub false_lock_3axis: bool,
     }
 }
 
@@ -339,32 +298,23 @@ crate::metrics! {
     /// The `linebias` variant's figures (configurations 2 and 3: without bias states).
     pub struct LineBiasFigures {
         /// σ_β without bias states, Gaussian.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_without_bias_states: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_without_bias_states: f64,
         /// σ_β without bias states, constant gain.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_without_bias_states_constant_gain: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_without_bias_states_constant_gain: f64,
         /// σ_β without bias states on the I/Q path.
-        #[metric(unit = "arcmin")]
-        pub sigma_arcmin_without_bias_states_iq: f64,
+        #[metric(unit = "arcmin")] pub sigma_arcmin_without_bias_states_iq: f64,
         /// False lock without bias states.
-        #[metric(unit = "")]
-        pub false_lock_without_bias_states: bool,
+        #[metric(unit = "")] pub false_lock_without_bias_states: bool,
         /// What estimating the biases costs: σ_β over the bound − 1.
-        #[metric(unit = "%")]
-        pub bias_cost_percent: f64,
+        #[metric(unit = "%")] pub bias_cost_percent: f64,
         /// The same on the I/Q path.
-        #[metric(unit = "%")]
-        pub bias_cost_percent_iq: f64,
+        #[metric(unit = "%")] pub bias_cost_percent_iq: f64,
         /// Bound if the biases were re-learned every epoch.
-        #[metric(unit = "arcmin")]
-        pub bound_arcmin_biases_unknown_per_epoch: f64,
+        #[metric(unit = "arcmin")] pub bound_arcmin_biases_unknown_per_epoch: f64,
         /// RMS of the final line-bias errors, Gaussian (null without bias states).
-        #[metric(unit = "rad")]
-        pub line_bias_error_rms_rad: f64,
+        #[metric(unit = "rad")] pub line_bias_error_rms_rad: f64,
         /// The same, constant gain.
-        #[metric(unit = "rad")]
-        pub line_bias_error_rms_rad_constant_gain: f64,
+        #[metric(unit = "rad")] pub line_bias_error_rms_rad_constant_gain: f64,
     }
 }
 
@@ -512,7 +462,13 @@ impl Runs {
             .sampled
             .as_ref()
             .and_then(|_| self.iq_results[0].first());
-        files::write_files(dir, variant, self.path().0, &hg, &hc, iq_g, self.bound)
+        let run0 = files::Run0 {
+            path: self.path().0,
+            gauss: &hg,
+            cg: &hc,
+            iq_gauss: iq_g,
+        };
+        files::write_files(dir, variant, &run0, self.bound)
     }
 }
 

@@ -44,9 +44,9 @@ pub const SCENARIO: Scenario = Scenario {
     about: "fixed-point 3-antenna GPS L1 C/A chain on synthesized samples: acquisition, 60 s tracking, C/N0, phase differences",
     variants: &Variants {
         list: &[
-            Variant { name: "40dbhz", about: "8 satellites at 40 dB-Hz", config: 40.0 },
-            Variant { name: "35dbhz", about: "8 satellites at 35 dB-Hz", config: 35.0 },
-            Variant { name: "45dbhz", about: "8 satellites at 45 dB-Hz", config: 45.0 },
+            Variant::new("40dbhz", "8 satellites at 40 dB-Hz", 40.0),
+            Variant::new("35dbhz", "8 satellites at 35 dB-Hz", 35.0),
+            Variant::new("45dbhz", "8 satellites at 45 dB-Hz", 45.0),
         ],
         run: |&cn0_dbhz, ctx| run(cn0_dbhz, ctx),
     },
@@ -136,44 +136,34 @@ crate::metrics! {
     /// Metrics of `signal`.
     pub struct Metrics {
         /// PRN codes whose first 10 chips match IS-GPS-200 (of 32).
-        #[metric(unit = "")]
-        pub prn_chips_ok: usize,
+        #[metric(unit = "")] pub prn_chips_ok: usize,
         /// Visible satellites acquired.
-        #[metric(unit = "")]
-        pub acq_found: usize,
+        #[metric(unit = "")] pub acq_found: usize,
         /// Visible satellites not acquired.
-        #[metric(unit = "")]
-        pub acq_missed: usize,
+        #[metric(unit = "")] pub acq_missed: usize,
         /// Detected PRNs that are not in the scene.
-        #[metric(unit = "")]
-        pub acq_false: usize,
+        #[metric(unit = "")] pub acq_false: usize,
         /// Largest acquisition Doppler error against the truth.
-        #[metric(unit = "Hz")]
-        pub doppler_err_hz_max: f64,
+        #[metric(unit = "Hz")] pub doppler_err_hz_max: f64,
         /// Largest acquisition code-phase error against the truth.
-        #[metric(unit = "chip")]
-        pub code_err_chips_max: f64,
+        #[metric(unit = "chip")] pub code_err_chips_max: f64,
         /// Shortest over the satellites of the longest stretch with code and phase lock.
-        #[metric(unit = "s")]
-        pub lock_held_s: f64,
+        #[metric(unit = "s")] pub lock_held_s: f64,
         /// Largest error of the 1 s C/N0 reports (from 2 s on) against the synthesized C/N0.
-        #[metric(unit = "dB")]
-        pub cn0_err_db_max: f64,
+        #[metric(unit = "dB")] pub cn0_err_db_max: f64,
         /// RMS error of the inter-antenna carrier-phase differences from the prompts.
-        #[metric(unit = "cycle")]
-        pub phase_diff_err_rms_cycles: f64,
+        #[metric(unit = "cycle")] pub phase_diff_err_rms_cycles: f64,
         /// Theoretical RMS of that difference for two independent prompts (thermal noise).
-        #[metric(unit = "cycle")]
-        pub phase_diff_bound_cycles: f64,
+        #[metric(unit = "cycle")] pub phase_diff_bound_cycles: f64,
     }
 }
 
 /// The PRNs of the GPS constellation the chain searches and checks.
 const PRN_COUNT: u8 = 32;
-/// Half a code period, chips (wraps code-phase errors into ±511.5).
-const HALF_CODE_CHIPS: f64 = 511.5;
 /// Chips per code period.
 const CODE_CHIPS: f64 = 1023.0;
+/// Half a code period, chips (wraps code-phase errors into ±511.5).
+const HALF_CODE_CHIPS: f64 = CODE_CHIPS / 2.0;
 /// Coherent integration of one prompt, s.
 const PROMPT_S: f64 = 1e-3;
 /// Statistics start after the pull-in, s.

@@ -36,20 +36,20 @@ pub const SCENARIO: Scenario = Scenario {
         "EKF toolkit: multiplicative attitude EKF from two vector measurements, Monte Carlo NEES",
     variants: &Variants {
         list: &[
-            Variant {
-                name: "nominal",
-                about: "0.06 rad/s tumble, σ = 0.01, 200 runs of 120 s",
-                config: Config {
+            Variant::new(
+                "nominal",
+                "0.06 rad/s tumble, σ = 0.01, 200 runs of 120 s",
+                Config {
                     omega_mean: [0.03, -0.02, 0.045],
                 },
-            },
-            Variant {
-                name: "fast-tumble",
-                about: "0.6 rad/s tumble: linearization over 0.06 rad steps",
-                config: Config {
+            ),
+            Variant::new(
+                "fast-tumble",
+                "0.6 rad/s tumble: linearization over 0.06 rad steps",
+                Config {
                     omega_mean: [0.3, -0.2, 0.45],
                 },
-            },
+            ),
         ],
         run,
     },
@@ -306,35 +306,25 @@ crate::metrics! {
     /// Metrics of `vector-ekf`.
     pub struct Metrics {
         /// Attitude error RMS (rotation vector), second half of every run, f32 filter.
-        #[metric(unit = "rad")]
-        pub rotvec_rms_rad: f64,
+        #[metric(unit = "rad")] pub rotvec_rms_rad: f64,
         /// NEES averaged over runs and epochs (6 for a consistent filter).
-        #[metric(unit = "")]
-        pub nees_mean: f64,
+        #[metric(unit = "")] pub nees_mean: f64,
         /// Monte Carlo runs.
-        #[metric(unit = "")]
-        pub runs: usize,
+        #[metric(unit = "")] pub runs: usize,
         /// Degrees of freedom of the NEES.
-        #[metric(unit = "")]
-        pub nees_dof: usize,
+        #[metric(unit = "")] pub nees_dof: usize,
         /// 95 % interval of the run-averaged NEES of a consistent filter.
-        #[metric(unit = "")]
-        pub nees_interval_95: [f64; 2],
+        #[metric(unit = "")] pub nees_interval_95: [f64; 2],
         /// Fraction of epochs whose run-averaged NEES lies inside that interval.
-        #[metric(unit = "")]
-        pub nees_epochs_inside_95: f64,
+        #[metric(unit = "")] pub nees_epochs_inside_95: f64,
         /// RMS of the filter's own predicted attitude σ (norm over the axes), second half.
-        #[metric(unit = "rad")]
-        pub predicted_rms_rad: f64,
+        #[metric(unit = "rad")] pub predicted_rms_rad: f64,
         /// Attitude error RMS of the same filter in f64 on the same data.
-        #[metric(unit = "rad")]
-        pub rotvec_rms_rad_f64: f64,
+        #[metric(unit = "rad")] pub rotvec_rms_rad_f64: f64,
         /// Largest angle between the f32 and f64 estimates over all runs.
-        #[metric(unit = "rad")]
-        pub f32_vs_f64_max_rad: f64,
+        #[metric(unit = "rad")] pub f32_vs_f64_max_rad: f64,
         /// Fraction of measurements the NIS gate accepted.
-        #[metric(unit = "")]
-        pub accepted_fraction: f64,
+        #[metric(unit = "")] pub accepted_fraction: f64,
     }
 }
 

@@ -35,20 +35,15 @@ crate::metrics! {
     /// One injected (or natural) fault's outcome.
     pub struct FaultOutcome {
         /// The fault.
-        #[metric(unit = "")]
-        pub name: String,
+        #[metric(unit = "")] pub name: String,
         /// Whether the receiver reported it.
-        #[metric(unit = "")]
-        pub detected: bool,
+        #[metric(unit = "")] pub detected: bool,
         /// From the fault's end until the receiver had recovered (null: never).
-        #[metric(unit = "s")]
-        pub recovered_s: Option<f64>,
+        #[metric(unit = "s")] pub recovered_s: Option<f64>,
         /// When it happened.
-        #[metric(unit = "s")]
-        pub at_s: f64,
+        #[metric(unit = "s")] pub at_s: f64,
         /// What was detected and done.
-        #[metric(unit = "")]
-        pub detail: String,
+        #[metric(unit = "")] pub detail: String,
     }
 }
 
@@ -320,17 +315,36 @@ pub fn attitude_recovery(samples: &[Sample], from: f64, hold: f64) -> Option<f64
 
 /// How long the attitude must stay within 3σ to count as recovered, s.
 const RECOVERY_HOLD_S: f64 = 1.0;
-/// Windows in which the receiver's reaction to a fault is looked for, s after the fault:
-/// a setting satellite lost (from 0.2 s before), a rising one acquired and fixed, an antenna
-/// blocked and restored, a cycle slip found, a bit flip flagged.
-const LOST_BEFORE_S: f64 = 0.2;
-const LOST_WITHIN_S: f64 = 3.0;
-const ACQUIRED_WITHIN_S: f64 = 10.0;
-const FIXED_WITHIN_S: f64 = 20.0;
-const BLOCKED_WITHIN_S: f64 = 1.0;
-const RESTORED_WITHIN_S: f64 = 5.0;
-const SLIP_FOUND_WITHIN_S: f64 = 3.0;
-const BIT_FLAGGED_WITHIN_S: f64 = 0.1;
+/// Windows in which the receiver's reaction to a fault is looked for, s after the fault.
+struct Windows {
+    /// A setting satellite lost: from this long before it sets...
+    lost_before: f64,
+    /// ... to this long after.
+    lost: f64,
+    /// A rising satellite's first observation.
+    acquired: f64,
+    /// A rising satellite's ambiguities fixed.
+    fixed: f64,
+    /// An antenna blockage detected.
+    blocked: f64,
+    /// A blocked antenna restored (after the blockage's end).
+    restored: f64,
+    /// A cycle slip found.
+    slip_found: f64,
+    /// A bit flip flagged.
+    bit_flagged: f64,
+}
+
+const WINDOW: Windows = Windows {
+    lost_before: 0.2,
+    lost: 3.0,
+    acquired: 10.0,
+    fixed: 20.0,
+    blocked: 1.0,
+    restored: 5.0,
+    slip_found: 3.0,
+    bit_flagged: 0.1,
+};
 
 /// Antenna names.
 const ANTENNA: [&str; 3] = ["A", "B", "C"];
@@ -368,8 +382,8 @@ fn satellite_setting(ev: &Events, after_s: f64) -> Option<FaultOutcome> {
         .iter()
         .find(|(t, _, rises)| *t > after_s && !rises)?;
     let lost = ev.find(
-        ts - LOST_BEFORE_S,
-        ts + LOST_WITHIN_S,
+        ts - WINDOW.lost_before,
+        ts + WINDOW.lost,
         &|e| matches!(e, ReceiverEvent::SatelliteLost { prn: p, .. } if *p == prn),
     );
     let att = ev.recovery(ts);
@@ -395,12 +409,12 @@ fn satellite_rising(ev: &Events, after_s: f64) -> Option<FaultOutcome> {
         .find(|(t, _, rises)| *t > after_s && *rises)?;
     let acquired = ev.find(
         tr,
-        tr + ACQUIRED_WITHIN_S,
+        tr + WINDOW.acquired,
         &|e| matches!(e, ReceiverEvent::SatelliteAcquired { prn: p, .. } if *p == prn),
     );
     let fixed = ev.find(
         tr,
-        tr + FIXED_WITHIN_S,
+        tr + WINDOW.fixed,
         &|e| matches!(e, ReceiverEvent::AmbiguityFixed { prn: p, .. } if *p == prn),
     );
     Some(FaultOutcome {
@@ -421,12 +435,12 @@ fn blockage(ev: &Events, b: &super::world::Blockage) -> FaultOutcome {
     let antenna = b.antenna as u8;
     let blocked = ev.find(
         b.start,
-        b.start + BLOCKED_WITHIN_S,
+        b.start + WINDOW.blocked,
         &|e| matches!(e, ReceiverEvent::AntennaBlocked { antenna: a, .. } if *a == antenna),
     );
     let restored = ev.find(
         b.end,
-        b.end + RESTORED_WITHIN_S,
+        b.end + WINDOW.restored,
         &|e| matches!(e, ReceiverEvent::AntennaRestored { antenna: a, .. } if *a == antenna),
     );
     let att = ev.recovery(b.end);
@@ -465,7 +479,7 @@ fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutco
         .iter()
         .find(|(t, e)| {
             *t >= ts
-                && *t <= ts + SLIP_FOUND_WITHIN_S
+                && *t <= ts + WINDOW.slip_found
                 && matches!(e, ReceiverEvent::CycleSlip { prn: p, antenna: a, .. } if *p == prn && usize::from(*a) == antenna)
         })
         .copied();
@@ -502,7 +516,7 @@ fn bit_flip(ev: &Events, plan: &super::run::FaultPlan) -> Option<FaultOutcome> {
     );
     let seen = ev.find(
         tf,
-        tf + BIT_FLAGGED_WITHIN_S,
+        tf + WINDOW.bit_flagged,
         &|e| matches!(e, ReceiverEvent::BitAnomaly { prn: p, .. } if *p == prn),
     );
     Some(FaultOutcome {

@@ -3,29 +3,38 @@
 use super::sim::{RunResult, Sample};
 use crate::report::{plot_panels, write_csv, Panel, Series};
 
-/// The CSV of run 0 of each filter form on the headline path and the plot of its errors
-/// (with the I/Q fast path's run 0 of the Gaussian form when the headline is sample-level).
+/// Run 0 of each filter form on the headline path, and the I/Q fast path's run 0 of the
+/// Gaussian form when the headline is sample-level.
+pub struct Run0<'a> {
+    /// Where the headline comes from (`samples` or `iq`).
+    pub path: &'a str,
+    /// The Gaussian-approximation filter.
+    pub gauss: &'a RunResult,
+    /// The constant-gain filter.
+    pub cg: &'a RunResult,
+    /// The Gaussian filter on the I/Q fast path beside a sample-level headline.
+    pub iq_gauss: Option<&'a RunResult>,
+}
+
+/// The CSV of run 0 and the plot of its errors against the bound (arc-minutes).
 pub fn write_files(
     dir: &std::path::Path,
     variant: &str,
-    path: &str,
-    gauss: &RunResult,
-    cg: &RunResult,
-    iq_gauss: Option<&RunResult>,
+    run0: &Run0<'_>,
     bound: f64,
 ) -> anyhow::Result<Vec<std::path::PathBuf>> {
     let stem = format!("one_stage_{}", variant.replace('.', "_"));
     let csv = dir.join(format!("{stem}_run0.csv"));
-    write_run0_csv(&csv, gauss, cg)?;
+    write_run0_csv(&csv, run0.gauss, run0.cg)?;
     let png = dir.join(format!("{stem}_error.png"));
-    plot_run0(&png, variant, path, gauss, cg, iq_gauss, bound)?;
+    plot_run0(&png, variant, run0, bound)?;
     Ok(vec![csv, png])
 }
 
 /// Run 0 of both filter forms, epoch by epoch.
 fn write_run0_csv(csv: &std::path::Path, gauss: &RunResult, cg: &RunResult) -> anyhow::Result<()> {
     write_csv(
-        &csv,
+        csv,
         &[
             "t_s",
             "err_gaussian_arcmin",
@@ -55,12 +64,10 @@ fn write_run0_csv(csv: &std::path::Path, gauss: &RunResult, cg: &RunResult) -> a
 fn plot_run0(
     png: &std::path::Path,
     variant: &str,
-    path: &str,
-    gauss: &RunResult,
-    cg: &RunResult,
-    iq_gauss: Option<&RunResult>,
+    run0: &Run0<'_>,
     bound: f64,
 ) -> anyhow::Result<()> {
+    let (path, gauss, cg, iq_gauss) = (run0.path, run0.gauss, run0.cg, run0.iq_gauss);
     let pts = |r: &RunResult, f: fn(&Sample) -> f64| -> Vec<(f64, f64)> {
         r.samples.iter().map(|s| (s.t, f(s))).collect()
     };

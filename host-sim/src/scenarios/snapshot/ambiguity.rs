@@ -169,13 +169,16 @@ fn measure(
     Ok(m)
 }
 
+/// Integer ambiguities per baseline and satellite.
+type Integers = [[i32; 12]; 2];
+
 /// Float-then-round (host f64): code-only float baseline per baseline, rounded float
 /// ambiguities, the snapshot solver on the fixed phases. Returns the integers and the solve.
 fn float_then_round(
     views: &[SatelliteView],
     m: &Measured,
     snapshot: &SnapshotSolver<2, f32>,
-) -> anyhow::Result<([[i32; 12]; 2], Result<SnapshotSolution<f32>, SnapshotError>)> {
+) -> anyhow::Result<(Integers, Result<SnapshotSolution<f32>, SnapshotError>)> {
     let lambda = GPS_L1_WAVELENGTH_M;
     let n = views.len();
     let los: Vec<Vector3<f64>> = views.iter().map(|v| v.los_ned).collect();
@@ -302,20 +305,15 @@ crate::metrics! {
     /// Refusals of the constrained resolver by cause.
     pub struct Refusals {
         /// Ratio test failed.
-        #[metric(unit = "epochs")]
-        pub ambiguous: usize,
+        #[metric(unit = "epochs")] pub ambiguous: usize,
         /// χ² test failed.
-        #[metric(unit = "epochs")]
-        pub model_rejected: usize,
+        #[metric(unit = "epochs")] pub model_rejected: usize,
         /// No candidate in the search space.
-        #[metric(unit = "epochs")]
-        pub no_candidate: usize,
+        #[metric(unit = "epochs")] pub no_candidate: usize,
         /// Search budget exhausted.
-        #[metric(unit = "epochs")]
-        pub budget: usize,
+        #[metric(unit = "epochs")] pub budget: usize,
         /// Input refused.
-        #[metric(unit = "epochs")]
-        pub input: usize,
+        #[metric(unit = "epochs")] pub input: usize,
     }
 }
 
@@ -323,20 +321,15 @@ crate::metrics! {
     /// The constrained resolver's rates for one number of satellites.
     pub struct BySatellites {
         /// Satellites in the epoch.
-        #[metric(unit = "")]
-        pub satellites: usize,
+        #[metric(unit = "")] pub satellites: usize,
         /// Epochs with that many satellites.
-        #[metric(unit = "")]
-        pub epochs: usize,
+        #[metric(unit = "")] pub epochs: usize,
         /// Epochs fixed to the true integers.
-        #[metric(unit = "")]
-        pub success_rate: f64,
+        #[metric(unit = "")] pub success_rate: f64,
         /// Epochs fixed to wrong integers.
-        #[metric(unit = "")]
-        pub wrong_fix_rate: f64,
+        #[metric(unit = "")] pub wrong_fix_rate: f64,
         /// Epochs refused.
-        #[metric(unit = "")]
-        pub refusal_rate: f64,
+        #[metric(unit = "")] pub refusal_rate: f64,
     }
 }
 
@@ -344,65 +337,45 @@ crate::metrics! {
     /// Metrics of `snapshot --variant ambiguity`.
     pub struct Metrics {
         /// Constrained resolver: epochs fixed to the true integers.
-        #[metric(unit = "")]
-        pub success_rate: f64,
+        #[metric(unit = "")] pub success_rate: f64,
         /// Constrained resolver: epochs fixed to wrong integers.
-        #[metric(unit = "")]
-        pub wrong_fix_rate: f64,
+        #[metric(unit = "")] pub wrong_fix_rate: f64,
         /// Constrained resolver: epochs refused.
-        #[metric(unit = "")]
-        pub refusal_rate: f64,
+        #[metric(unit = "")] pub refusal_rate: f64,
         /// Constrained resolver: RMS rotation-angle error of the fixed epochs.
-        #[metric(unit = "deg")]
-        pub err_deg_rms: f64,
+        #[metric(unit = "deg")] pub err_deg_rms: f64,
         /// Unconstrained LAMBDA: epochs fixed to the true integers.
-        #[metric(unit = "")]
-        pub lambda_success_rate: f64,
+        #[metric(unit = "")] pub lambda_success_rate: f64,
         /// Unconstrained LAMBDA: epochs fixed to wrong integers.
-        #[metric(unit = "")]
-        pub lambda_wrong_fix_rate: f64,
+        #[metric(unit = "")] pub lambda_wrong_fix_rate: f64,
         /// Unconstrained LAMBDA: epochs refused.
-        #[metric(unit = "")]
-        pub lambda_refusal_rate: f64,
+        #[metric(unit = "")] pub lambda_refusal_rate: f64,
         /// Unconstrained LAMBDA: RMS rotation-angle error of the fixed epochs.
-        #[metric(unit = "deg")]
-        pub lambda_err_deg_rms: f64,
+        #[metric(unit = "deg")] pub lambda_err_deg_rms: f64,
         /// Float-then-round: epochs fixed to the true integers.
-        #[metric(unit = "")]
-        pub round_success_rate: f64,
+        #[metric(unit = "")] pub round_success_rate: f64,
         /// Float-then-round: epochs fixed to wrong integers.
-        #[metric(unit = "")]
-        pub round_wrong_fix_rate: f64,
+        #[metric(unit = "")] pub round_wrong_fix_rate: f64,
         /// Float-then-round: epochs refused.
-        #[metric(unit = "")]
-        pub round_refusal_rate: f64,
+        #[metric(unit = "")] pub round_refusal_rate: f64,
         /// Float-then-round: RMS rotation-angle error of the fixed epochs.
-        #[metric(unit = "deg")]
-        pub round_err_deg_rms: f64,
+        #[metric(unit = "deg")] pub round_err_deg_rms: f64,
         /// Monte Carlo epochs.
-        #[metric(unit = "")]
-        pub epochs: usize,
+        #[metric(unit = "")] pub epochs: usize,
         /// Mean number of satellites per epoch.
-        #[metric(unit = "")]
-        pub satellites_mean: f64,
+        #[metric(unit = "")] pub satellites_mean: f64,
         /// Mean search-tree nodes of the constrained resolver.
-        #[metric(unit = "")]
-        pub nodes_mean: f64,
+        #[metric(unit = "")] pub nodes_mean: f64,
         /// Largest search-tree node count.
-        #[metric(unit = "")]
-        pub nodes_max: f64,
+        #[metric(unit = "")] pub nodes_max: f64,
         /// Mean candidates fitted per epoch.
-        #[metric(unit = "")]
-        pub candidates_mean: f64,
+        #[metric(unit = "")] pub candidates_mean: f64,
         /// Median ratio-test value.
-        #[metric(unit = "")]
-        pub ratio_median: f64,
+        #[metric(unit = "")] pub ratio_median: f64,
         /// Refusals by cause.
-        #[metric(nested)]
-        pub refusals: Refusals,
+        #[metric(nested)] pub refusals: Refusals,
         /// The constrained resolver by number of satellites.
-        #[metric(nested)]
-        pub by_satellites: Vec<BySatellites>,
+        #[metric(nested)] pub by_satellites: Vec<BySatellites>,
     }
 }
 

@@ -45,53 +45,37 @@ crate::metrics! {
     /// Metrics of `snapshot --variant four-antenna` ([heading, roll, pitch] where per axis).
     pub struct Metrics {
         /// Cramér–Rao bound at 4 mm, [heading, roll, pitch].
-        #[metric(unit = "deg")]
-        pub crb_deg: [f64; 3],
+        #[metric(unit = "deg")] pub crb_deg: [f64; 3],
         /// The paper's formula (16) at 4 mm: mean error.
-        #[metric(unit = "deg")]
-        pub paper_formula_mean_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub paper_formula_mean_err_deg: [f64; 3],
         /// The paper's formula at 4 mm: error standard deviation.
-        #[metric(unit = "deg")]
-        pub paper_formula_std_deg: [f64; 3],
+        #[metric(unit = "deg")] pub paper_formula_std_deg: [f64; 3],
         /// The general solver at 4 mm: mean error.
-        #[metric(unit = "deg")]
-        pub general_mean_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub general_mean_err_deg: [f64; 3],
         /// The general solver at 4 mm: error standard deviation.
-        #[metric(unit = "deg")]
-        pub general_std_deg: [f64; 3],
+        #[metric(unit = "deg")] pub general_std_deg: [f64; 3],
         /// Epochs at 4 mm where the paper's formula met `det Q < 0` (refused).
-        #[metric(unit = "epochs")]
-        pub paper_formula_reflections_4mm: usize,
+        #[metric(unit = "epochs")] pub paper_formula_reflections_4mm: usize,
         /// Epochs at 0.3 m where the paper's formula met `det Q < 0` (refused).
-        #[metric(unit = "epochs")]
-        pub paper_formula_reflections_0_3m: usize,
+        #[metric(unit = "epochs")] pub paper_formula_reflections_0_3m: usize,
         /// Fraction of the 0.3 m epochs with `det Q < 0`.
-        #[metric(unit = "")]
-        pub paper_formula_reflection_rate_0_3m: f64,
+        #[metric(unit = "")] pub paper_formula_reflection_rate_0_3m: f64,
         /// Reflections the general solver returned (both levels).
-        #[metric(unit = "epochs")]
-        pub general_reflections: usize,
+        #[metric(unit = "epochs")] pub general_reflections: usize,
         /// Epochs the general solver refused (both levels).
-        #[metric(unit = "epochs")]
-        pub general_failures: usize,
+        #[metric(unit = "epochs")] pub general_failures: usize,
         /// The paper's formula at 0.3 m: RMS rotation-angle error of the epochs it returns.
-        #[metric(unit = "deg")]
-        pub paper_formula_rms_deg_0_3m: f64,
+        #[metric(unit = "deg")] pub paper_formula_rms_deg_0_3m: f64,
         /// The general solver at 0.3 m: RMS rotation-angle error.
-        #[metric(unit = "deg")]
-        pub general_rms_deg_0_3m: f64,
+        #[metric(unit = "deg")] pub general_rms_deg_0_3m: f64,
         /// The paper's formula at 4 mm: RMS rotation-angle error.
-        #[metric(unit = "deg")]
-        pub paper_formula_rms_deg_4mm: f64,
+        #[metric(unit = "deg")] pub paper_formula_rms_deg_4mm: f64,
         /// The general solver at 4 mm: RMS rotation-angle error.
-        #[metric(unit = "deg")]
-        pub general_rms_deg_4mm: f64,
+        #[metric(unit = "deg")] pub general_rms_deg_4mm: f64,
         /// Rotation-angle error of the paper's formula without noise.
-        #[metric(unit = "deg")]
-        pub noise_free_paper_formula_err_deg: f64,
+        #[metric(unit = "deg")] pub noise_free_paper_formula_err_deg: f64,
         /// Monte Carlo epochs per noise level.
-        #[metric(unit = "")]
-        pub epochs_per_level: usize,
+        #[metric(unit = "")] pub epochs_per_level: usize,
     }
 }
 

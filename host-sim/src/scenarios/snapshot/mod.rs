@@ -29,22 +29,21 @@ pub const SCENARIO: Scenario = Scenario {
         "Paper 002: snapshot attitude from carrier-phase range differences, ambiguity resolution",
     variants: &Variants::<Runner> {
         list: &[
-            Variant {
-                name: "paper",
-                about: "1 m triangle, 3 sats el 60/45/30, heading 180, 4 mm, vs CRB and the paper",
-                config: paper::run,
-            },
-            Variant {
-                name: "ambiguity",
-                about:
-                    "real GPS sky, 6-10 sats, 3 mm / 0.3 m, unknown integers, vs LAMBDA and rounding",
-                config: ambiguity::run,
-            },
-            Variant {
-                name: "four-antenna",
-                about: "1 m tetrahedron: the paper's formula (16) vs the general solver",
-                config: four_antenna::run,
-            },
+            Variant::new(
+                "paper",
+                "1 m triangle, 3 sats el 60/45/30, heading 180, 4 mm, vs CRB and the paper",
+                paper::run,
+            ),
+            Variant::new(
+                "ambiguity",
+                "real GPS sky, 6-10 sats, 3 mm / 0.3 m, unknown integers, vs LAMBDA and rounding",
+                ambiguity::run,
+            ),
+            Variant::new(
+                "four-antenna",
+                "1 m tetrahedron: the paper's formula (16) vs the general solver",
+                four_antenna::run,
+            ),
         ],
         run: |run, ctx| run(ctx),
     },

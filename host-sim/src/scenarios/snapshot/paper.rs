@@ -73,44 +73,31 @@ crate::metrics! {
     /// Metrics of `snapshot --variant paper` (each triple `[heading, roll, pitch]`).
     pub struct Metrics {
         /// Mean error of the core's solver.
-        #[metric(unit = "deg")]
-        pub mean_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub mean_err_deg: [f64; 3],
         /// Standard deviation of its error.
-        #[metric(unit = "deg")]
-        pub std_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub std_err_deg: [f64; 3],
         /// Cramér–Rao bound for the same geometry and noise.
-        #[metric(unit = "deg")]
-        pub crb_deg: [f64; 3],
+        #[metric(unit = "deg")] pub crb_deg: [f64; 3],
         /// Solutions that were reflections (`det C < 0`).
-        #[metric(unit = "epochs")]
-        pub reflections: usize,
+        #[metric(unit = "epochs")] pub reflections: usize,
         /// Monte Carlo epochs.
-        #[metric(unit = "")]
-        pub epochs: usize,
+        #[metric(unit = "")] pub epochs: usize,
         /// Epochs the solver refused.
-        #[metric(unit = "epochs")]
-        pub failures: usize,
+        #[metric(unit = "epochs")] pub failures: usize,
         /// Standard deviation over the CRB.
-        #[metric(unit = "")]
-        pub std_over_crb: [f64; 3],
+        #[metric(unit = "")] pub std_over_crb: [f64; 3],
         /// Mean of the solver's own predicted σ.
-        #[metric(unit = "deg")]
-        pub predicted_std_deg: [f64; 3],
+        #[metric(unit = "deg")] pub predicted_std_deg: [f64; 3],
         /// The paper's mean error over ours (how much better the core is).
-        #[metric(unit = "")]
-        pub paper_over_mean_err: [f64; 3],
+        #[metric(unit = "")] pub paper_over_mean_err: [f64; 3],
         /// Mean χ² of the solutions (3 degrees of freedom).
-        #[metric(unit = "")]
-        pub chi_square_mean: f64,
+        #[metric(unit = "")] pub chi_square_mean: f64,
         /// The printed algorithm with a pseudo-inverse (determinant-corrected): mean error.
-        #[metric(unit = "deg")]
-        pub pinv_mean_err_deg: [f64; 3],
-        /// Its error standard deviation.
-        #[metric(unit = "deg")]
-        pub pinv_std_err_deg: [f64; 3],
+        #[metric(unit = "deg")] pub pinv_mean_err_deg: [f64; 3],
+        /// The printed algorithm (pseudo-inverse): error standard deviation.
+        #[metric(unit = "deg")] pub pinv_std_err_deg: [f64; 3],
         /// Epochs in which its polar factor (16) was a reflection.
-        #[metric(unit = "epochs")]
-        pub pinv_reflections: usize,
+        #[metric(unit = "epochs")] pub pinv_reflections: usize,
     }
 }
 
