@@ -49,7 +49,7 @@ const SIGNIFICANT: i32 = 4;
 /// Magnitudes shown in fixed notation; others in scientific notation.
 const FIXED_RANGE: std::ops::Range<f64> = 1e-3..1e5;
 
-/// A number to [`SIGNIFICANT`] digits.
+/// A number to four significant digits (fixed notation from 0.001 to 100 000).
 pub fn number(x: f64) -> String {
     if x == 0.0 {
         return "0".into();

@@ -174,7 +174,7 @@ const PALETTE: [u32; 10] = [
     0x17becf,
 ];
 
-/// Colour `i` of [`PALETTE`] (repeating).
+/// Colour `i` of the plots' ten-colour palette (Tableau 10, repeating).
 pub fn palette(i: usize) -> RGBAColor {
     let [_, r, g, b] = PALETTE[i % PALETTE.len()].to_be_bytes();
     RGBColor(r, g, b).to_rgba()

@@ -1,7 +1,11 @@
 //! The scenario's files: run 0's time series (CSV) and the plot of its errors.
 
 use super::sim::{RunResult, Sample};
-use crate::report::{plot_panels, write_csv, Panel, Series};
+use crate::report::{plot_panels, write_csv, Dash, Panel, Series};
+
+/// Line widths of the curve drawn beneath and of the one drawn on top of it, px.
+const WIDE_PX: u32 = 3;
+const THIN_PX: u32 = 1;
 
 /// Run 0 of each filter form on the headline path, and the I/Q fast path's run 0 of the
 /// Gaussian form when the headline is sample-level.
@@ -73,30 +77,36 @@ fn plot_run0(
     };
     let t_end = gauss.samples.last().map_or(0.0, |s| s.t);
     let mut errors = vec![
+        // the two forms nearly coincide: the Gaussian one wide beneath, constant gain thin on top
         Series::line(
             format!("Gaussian approximation ({path})"),
             pts(gauss, |s| s.error_arcmin),
             0,
-        ),
+        )
+        .styled(Dash::Solid, WIDE_PX),
         Series::line(
             format!("constant gain ({path})"),
             pts(cg, |s| s.error_arcmin),
-            2,
-        ),
+            1,
+        )
+        .styled(Dash::Solid, THIN_PX),
     ];
     if let Some(iq) = iq_gauss {
-        errors.push(Series::line(
-            "Gaussian approximation (I/Q fast path)",
-            pts(iq, |s| s.error_arcmin),
-            3,
-        ));
+        errors.push(
+            Series::line(
+                "Gaussian approximation (I/Q fast path)",
+                pts(iq, |s| s.error_arcmin),
+                2,
+            )
+            .styled(Dash::Solid, THIN_PX),
+        );
     }
     errors.push(Series::bound(
         "± bound",
         vec![(0.0, bound), (t_end, bound)],
-        1,
+        3,
     ));
-    errors.push(Series::bound("", vec![(0.0, -bound), (t_end, -bound)], 1));
+    errors.push(Series::bound("", vec![(0.0, -bound), (t_end, -bound)], 3));
     let panels = vec![
         Panel {
             y_label: "β̂ − β (arc-min)".into(),
@@ -105,8 +115,10 @@ fn plot_run0(
         Panel {
             y_label: "alignment η̄".into(),
             series: vec![
-                Series::line("Gaussian approximation", pts(gauss, |s| s.alignment), 0),
-                Series::line("constant gain", pts(cg, |s| s.alignment), 2),
+                Series::line("Gaussian approximation", pts(gauss, |s| s.alignment), 0)
+                    .styled(Dash::Solid, WIDE_PX),
+                Series::line("constant gain", pts(cg, |s| s.alignment), 1)
+                    .styled(Dash::Solid, THIN_PX),
             ],
         },
     ];
