@@ -147,12 +147,22 @@ impl<T: Describe> Describe for Suffixed<T> {
 
 /// The description of the field called `name` among `fields`, looking into flattened groups.
 pub fn find_field(fields: &'static [Field], name: &str) -> Option<&'static Field> {
+    find_field_in(fields, name).map(|(f, _)| f)
+}
+
+/// [`find_field`], with the suffixed group the field was found in (whose doc says what the
+/// suffix means).
+pub fn find_field_in(
+    fields: &'static [Field],
+    name: &str,
+) -> Option<(&'static Field, Option<&'static Field>)> {
     fields.iter().find_map(|f| match f.nesting {
-        Nesting::Flatten(inner) => find_field(inner, name),
-        Nesting::Suffixed(suffix, inner) => {
-            name.strip_suffix(suffix).and_then(|n| find_field(inner, n))
-        }
-        _ => (f.name == name).then_some(f),
+        Nesting::Flatten(inner) => find_field_in(inner, name),
+        Nesting::Suffixed(suffix, inner) => name
+            .strip_suffix(suffix)
+            .and_then(|n| find_field(inner, n))
+            .map(|found| (found, Some(f))),
+        _ => (f.name == name).then_some((f, None)),
     })
 }
 

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use anyhow::{bail, Result};
 use serde_json::{Map, Value};
 
-use crate::outcome::{find_field, Field, Nesting, Outcome};
+use crate::outcome::{find_field_in, Field, Nesting, Outcome};
 
 /// A run rendered: the Markdown of its results, and its wall-clock times.
 #[derive(Clone, Debug, Default)]
@@ -103,8 +103,13 @@ fn collect<'a>(
     out: &mut Collected<'a>,
 ) -> Result<()> {
     for (key, value) in map {
-        let Some(field) = find_field(fields, key) else {
+        let Some((field, group)) = find_field_in(fields, key) else {
             bail!("metric {prefix}{key} has no description in its metrics struct");
+        };
+        // a suffixed group's doc says what its suffix means
+        let about = match group {
+            Some(g) => format!("{} ({})", cell(field.about), cell(g.about)),
+            None => cell(field.about),
         };
         let name = format!("{prefix}{key}");
         match (field.nesting, value) {
@@ -113,7 +118,7 @@ fn collect<'a>(
             }
             (Nesting::Object(inner), Value::Array(items)) => out.records.push(Records {
                 name,
-                about: cell(field.about),
+                about,
                 fields: inner,
                 items,
             }),
@@ -130,7 +135,7 @@ fn collect<'a>(
                 name,
                 value: value_text(value),
                 unit: field.unit,
-                about: cell(field.about),
+                about,
             }),
         }
     }
