@@ -44,16 +44,16 @@
 //! candidates (a `heapless::Vec`); on the target it uses a few kilobytes of stack for
 //! `N = 12`.
 
-use nalgebra::{SMatrix, Vector3};
+use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
 
 use crate::attitude::snapshot::SnapshotError;
 use crate::ekf::{chi_square_quantile, GateConfidence};
 use crate::{real, Real};
 
-use super::integer_search::{IntegerSearch, SearchFailure};
-use super::lambda::decorrelate;
-use super::range_model::{los_normal_matrix, RangeDifferences, SatelliteRanges};
+use super::integer_search::{IntegerSearch, SearchFailure, SearchOutcome};
+use super::lambda::{decorrelate, Decorrelation};
 pub use super::range_model::{PhaseObservations, PhaseSatellite};
+use super::range_model::{RangeDifferences, SatelliteRanges};
 use super::snapshot::{SnapshotSolution, SnapshotSolver};
 use crate::error::{Error, ErrorKind};
 
@@ -117,6 +117,10 @@ pub struct AmbiguityFix<const M: usize, const N: usize, T = f32> {
     pub second_cost: T,
     /// `second_cost / cost`.
     pub ratio: T,
+    /// True when the search found no rival inside its bound: `second_cost` is then the
+    /// bound, and `ratio` only a lower bound of the true ratio (the bound is pruned to
+    /// `ratio_threshold` times the best cost, so such a ratio equals the threshold).
+    pub ratio_is_lower_bound: bool,
     /// Search tree nodes visited.
     pub nodes: u32,
     /// Full candidates evaluated (each a Wahba + Gauss–Newton fit when constrained).
@@ -166,8 +170,8 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         &self.config
     }
 
-    /// Resolves the ambiguities of one epoch and solves the attitude.
-    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
+    /// Resolves the ambiguities of one epoch and solves the attitude (line biases removed
+    /// by the caller).
     ///
     /// # Errors
     /// [`AmbiguityError::Input`] for too few satellites or coplanar lines of sight;
@@ -177,81 +181,120 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         &self,
         obs: &PhaseObservations<M, N, T>,
     ) -> Result<AmbiguityFix<M, N, T>, AmbiguityError> {
-        // (n ≤ N holds by construction; the clamp lets the compiler see it, so that indexing
-        // by satellite cannot panic.)
+        let model = FloatModel::single_differences(obs)?;
+        let (fixed, search) = self.fix_integers(&model)?;
+        let n = obs.satellites().len().min(N);
+        let ranges = self.fixed_ranges(
+            obs.satellites().get(..n).unwrap_or(&[]),
+            &fixed,
+            &[T::zero(); M],
+        )?;
+        Ok(search.fix(fixed, self.solver.solve(&ranges)?))
+    }
+
+    /// Resolves the ambiguities of one epoch whose single differences carry an unknown line
+    /// bias per baseline (the phase each slave antenna's RF chain adds), and solves the
+    /// attitude and the biases.
+    ///
+    /// The biases cancel in the double differences against a reference satellite (the one
+    /// with the smallest cofactor): the search runs on those, with their full covariance
+    /// `C_jl = c_j δ_jl + c_r` (the reference's noise is in every one of them). A bias is
+    /// defined only modulo a cycle together with the integers; the convention is that the
+    /// reference satellite's integers are zero, so the fix's integers `z_ij` and biases `b_i`
+    /// give `φ_ij − b_i − z_ij = s_jᵀ a_i / λ`. The biases come from the joint least squares
+    /// of `(a_i, b_i)` on the fixed phases, their σ from its covariance.
+    ///
+    /// # Errors
+    /// As [`Self::resolve`]; at least four satellites are needed (three double differences).
+    pub fn resolve_with_line_biases<const N: usize>(
+        &self,
+        obs: &PhaseObservations<M, N, T>,
+    ) -> Result<BiasedFix<M, N, T>, AmbiguityError> {
         let n = obs.satellites().len().min(N);
         let sats = obs.satellites().get(..n).unwrap_or(&[]);
-        let cfg = &self.config;
-        let lambda = cfg.wavelength_m;
-        let (var_phi, var_code) = (
-            cfg.phase_sigma_m * cfg.phase_sigma_m,
-            cfg.code_sigma_m * cfg.code_sigma_m,
-        );
-        let (k_phi, k_code) = (T::one() / var_phi, T::one() / var_code);
-        let kappa = k_phi + k_code;
-        let (info, info_inv) =
-            los_normal_matrix(sats.iter().map(|s| (s.los, T::one() / s.cofactor)))?;
+        let reference = best_satellite(sats).ok_or(SnapshotError::TooFewSatellites)?;
+        let model = FloatModel::<M, N, T>::double_differences(sats, reference)?;
+        let (dd, search) = self.fix_integers(&model)?;
+        // single-difference integers: zero for the reference, the DD integers for the others
+        let mut fixed = [[0i32; N]; M];
+        for (i, row) in fixed.iter_mut().enumerate() {
+            let mut next = 0usize;
+            for (j, z) in row.iter_mut().enumerate().take(n) {
+                if j != reference {
+                    *z = dd[i].get(next).copied().unwrap_or(0);
+                    next += 1;
+                }
+            }
+        }
+        // the biases from the phases alone, the attitude, then the biases again at the
+        // attitude (the baseline lengths and angle now constrain them) and the attitude again
+        let (bias, joint_sigma) = self.line_biases(sats, &fixed)?;
+        let first = self
+            .solver
+            .solve(&self.fixed_ranges(sats, &fixed, &bias)?)?;
+        let (bias, at_sigma) = self.line_biases_at(sats, &fixed, &first);
+        // the attitude's covariance treats the biases as known, which leaves their σ too small
+        // by 1.7 (measured by tests/snapshot.rs); the joint least squares' σ (without the
+        // baselines' constraint) bounds it from above
+        let bias_sigma: [T; M] = core::array::from_fn(|i| {
+            (at_sigma[i] * real(BIAS_SIGMA_FACTOR)).max(joint_sigma[i] * real(0.5))
+        });
+        let mut solution = self
+            .solver
+            .solve(&self.fixed_ranges(sats, &fixed, &bias)?)?;
+        solution.covariance +=
+            self.bias_sensitivity(sats, &fixed, &bias, &bias_sigma, &solution)?;
+        Ok(BiasedFix {
+            fix: search.fix(fixed, solution),
+            line_bias_cycles: bias,
+            line_bias_sigma_cycles: bias_sigma,
+            reference: sats.get(reference).map_or(0, |s| s.id),
+        })
+    }
 
-        // 1. Float solution: â_i = N⁻¹ S W p_i ; ẑ_ij = φ_ij − s_j·â_i / λ, shifted by round(ẑ)
-        let mut shift = [[T::zero(); N]; M];
-        let mut zfloat = [[T::zero(); N]; M];
-        let mut a_shift = [Vector3::<T>::zeros(); M];
-        for i in 0..M {
-            let mut rhs = Vector3::zeros();
-            for s in sats {
-                rhs += s.los * (s.code_m[i] / s.cofactor);
-            }
-            let a_code = info_inv * rhs;
-            let mut rhs_fixed = Vector3::zeros();
-            for (j, s) in sats.iter().enumerate() {
-                if j >= N {
-                    break;
-                }
-                let zf = s.phase_cycles[i] - s.los.dot(&a_code) / lambda;
-                let sh = zf.round();
-                shift[i][j] = sh;
-                zfloat[i][j] = zf - sh;
-                // ǎ_i at z = shift: N⁻¹ S W (κ_φ λ(φ − shift) + κ_p p) / κ
-                let r = (k_phi * lambda * (s.phase_cycles[i] - sh) + k_code * s.code_m[i]) / kappa;
-                rhs_fixed += s.los * (r / s.cofactor);
-            }
-            a_shift[i] = info_inv * rhs_fixed;
-        }
-        // Q₁ = (σ_φ² W⁻¹ + σ_p² Sᵀ N⁻¹ S) / λ²
-        let mut q1 = SMatrix::<T, N, N>::identity();
-        let l2 = lambda * lambda;
-        for (j, sj) in sats.iter().enumerate().take(N) {
-            for (l, sl) in sats.iter().enumerate().take(N) {
-                let mut v = var_code * sj.los.dot(&(info_inv * sl.los));
-                if j == l {
-                    v += var_phi * sj.cofactor;
-                }
-                q1[(j, l)] = v / l2;
-            }
-        }
-        // 2. LAMBDA decorrelation, ẑ' = Zᵀ ẑ
-        let dec = decorrelate(&q1, n)?;
-        let mut zhat = [[T::zero(); N]; M];
-        for i in 0..M {
-            for c in 0..n {
-                let mut v = T::zero();
-                for j in 0..n {
-                    v += dec.z[(j, c)] * zfloat[i][j];
-                }
-                zhat[i][c] = v;
-            }
-        }
-        // ǎ_i(z') = ǎ_i(shift) − T_a z'_i, T_a = (λ κ_φ / κ) N⁻¹ S W Z⁻ᵀ
-        let mut t_a = [Vector3::<T>::zeros(); N];
-        for (c, col) in t_a.iter_mut().enumerate().take(n) {
-            let mut v = Vector3::zeros();
-            for (j, s) in sats.iter().enumerate().take(N) {
-                v += s.los * (dec.z_inv_t[(j, c)] / s.cofactor);
-            }
-            *col = info_inv * v * (lambda * k_phi / kappa);
-        }
+    /// Steps 1–4 of the method on a float model: float solution, decorrelation, search,
+    /// validation. Returns the fixed integers (model order) and the search's figures.
+    fn fix_integers<const N: usize>(
+        &self,
+        model: &FloatModel<M, N, T>,
+    ) -> Result<([[i32; N]; M], SearchFigures<T>), AmbiguityError> {
+        let cfg = &self.config;
+        let float = model.float_solution(cfg);
+        let q1 = model.float_covariance(cfg);
+        let dec = decorrelate(&q1, model.n)?;
+        let zhat = transformed_floats(&dec, &float.zfloat);
+        let t_a = model.baseline_sensitivity(cfg, &dec);
+        let outcome = self.search(model, &float, &dec, zhat, &t_a)?;
+        let verdict = self.validate(model, &outcome)?;
+        let fixed = fixed_integers(model.n, &float.shift, &dec, &verdict.z);
+        Ok((
+            fixed,
+            SearchFigures {
+                cost: verdict.cost,
+                second_cost: verdict.second_cost,
+                ratio: verdict.ratio,
+                ratio_is_lower_bound: verdict.ratio_is_lower_bound,
+                nodes: outcome.nodes,
+                candidates: outcome.evaluated,
+            },
+        ))
+    }
+
+    /// Step 3: the bounded depth-first integer search, constrained by the baseline lengths
+    /// and angles ([`SearchMode::Constrained`]) or not.
+    fn search<const N: usize>(
+        &self,
+        model: &FloatModel<M, N, T>,
+        float: &FloatSolution<M, N, T>,
+        dec: &Decorrelation<N, T>,
+        zhat: [[T; N]; M],
+        t_a: &[Vector3<T>; N],
+    ) -> Result<SearchOutcome<M, N, T>, AmbiguityError> {
+        let cfg = &self.config;
+        let n = model.n;
+        let kappa = cfg.kappa();
         let conditional = |i: usize, z: &[T; N]| -> Vector3<T> {
-            let mut a = a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
+            let mut a = float.a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
             for (t, &zc) in t_a.iter().zip(z.iter()).take(n) {
                 a -= t * zc;
             }
@@ -260,32 +303,27 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         // Σ_B = L_B D_B L_Bᵀ (forward LDLᵀ)
         let sigma_b = self.solver.correlation().matrix();
         let (l_b, d_b) = ldlt_small(sigma_b).ok_or(SnapshotError::InvalidCorrelation)?;
-
-        // 3. Search
         let constrained = cfg.mode == SearchMode::Constrained;
-        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
-        let gate: T = real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(1e9));
         let search = IntegerSearch {
-            dec: &dec,
+            dec,
             zhat,
             l_b,
             d_b,
-            initial_bound: gate * cfg.ratio_threshold,
+            initial_bound: self.gate(n) * cfg.ratio_threshold,
             ratio: cfg.ratio_threshold,
             max_nodes: cfg.max_nodes,
         };
         let lengths = self.solver.baselines().as_array().map(|b| b.norm());
-        let length_var = info_inv.trace() / kappa;
-        let fit_info = info * kappa;
-        let outcome = search
+        let length_var = model.info_inv.trace() / kappa;
+        let fit_info = model.info * kappa;
+        search
             .run(
                 |i, z| {
-                    if !constrained {
-                        return T::zero();
-                    }
-                    let (Some(&length), Some(&var_i)) =
-                        (lengths.get(i), sigma_b.as_slice().get(i * (M + 1)))
-                    else {
+                    let (Some(&length), Some(&var_i), true) = (
+                        lengths.get(i),
+                        sigma_b.as_slice().get(i * (M + 1)),
+                        constrained,
+                    ) else {
                         return T::zero();
                     };
                     let d = conditional(i, z).norm() - length;
@@ -308,62 +346,513 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
             .map_err(|f| match f {
                 SearchFailure::Budget => AmbiguityError::SearchBudgetExhausted,
                 SearchFailure::Input(e) => AmbiguityError::Input(e),
-            })?;
+            })
+    }
 
-        // 4. Validation
+    /// The χ² gate (99.9 %) of the best candidate's cost: `M n + 3(M − 1)` degrees of freedom
+    /// constrained, `M n` unconstrained.
+    fn gate(&self, n: usize) -> T {
+        let constrained = self.config.mode == SearchMode::Constrained;
+        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
+        real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(UNBOUNDED_GATE))
+    }
+
+    /// Step 4: the best candidate must pass the χ² gate and beat every rival by the ratio.
+    fn validate<const N: usize>(
+        &self,
+        model: &FloatModel<M, N, T>,
+        outcome: &SearchOutcome<M, N, T>,
+    ) -> Result<Verdict<M, N, T>, AmbiguityError> {
         let best = outcome.best.first().ok_or(AmbiguityError::NoCandidate)?;
-        let second_cost = outcome.best.get(1).map(|c| c.cost).unwrap_or(outcome.bound);
+        let rival = outcome.best.get(1);
+        // without a rival inside the search bound, the bound (≥ threshold × best) is all the
+        // search proved: the ratio is a lower bound
+        let second_cost = rival.map_or(outcome.bound, |c| c.cost);
         let tiny = T::default_epsilon();
         let ratio = second_cost / if best.cost > tiny { best.cost } else { tiny };
-        if !(best.cost <= gate) {
+        if !(best.cost <= self.gate(model.n)) {
             return Err(AmbiguityError::ModelRejected);
         }
-        // Ambiguous when a second candidate was found below `threshold × best`. (When none was
-        // found, `second_cost` is the search bound, at least `threshold × best` up to rounding.)
-        let rival = outcome
-            .best
-            .get(1)
-            .is_some_and(|c| c.cost < best.cost * cfg.ratio_threshold);
-        if rival || !ratio.is_finite() {
+        let ambiguous = rival.is_some_and(|c| c.cost < best.cost * self.config.ratio_threshold);
+        if ambiguous || !ratio.is_finite() {
             return Err(AmbiguityError::Ambiguous);
         }
+        Ok(Verdict {
+            z: best.z,
+            cost: best.cost,
+            second_cost,
+            ratio,
+            ratio_is_lower_bound: rival.is_none(),
+        })
+    }
 
-        // 5. Fixed ambiguities z = shift + Z⁻ᵀ z', range differences, attitude
-        let mut ambiguities = [[0i32; N]; M];
+    /// Step 5: range differences of the fixed phases, biases `bias` (cycles) removed,
+    /// combined with the code.
+    fn fixed_ranges<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        fixed: &[[i32; N]; M],
+        bias: &[T; M],
+    ) -> Result<RangeDifferences<M, N, T>, AmbiguityError> {
+        let cfg = &self.config;
+        let (k_phi, k_code, kappa) = (cfg.k_phi(), cfg.k_code(), cfg.kappa());
         let mut ranges = RangeDifferences::<M, N, T>::new();
-        let sigma_fixed = |c: T| (c / kappa).sqrt();
-        for (j, s) in sats.iter().enumerate() {
-            if j >= N {
-                break;
-            }
+        for (j, s) in sats.iter().enumerate().take(N) {
             let mut range_diff = [T::zero(); M];
             for i in 0..M {
-                let mut zij = shift[i][j];
-                for c in 0..n {
-                    zij += dec.z_inv_t[(j, c)] * best.z[i][c];
-                }
-                ambiguities[i][j] = to_i32(zij);
-                range_diff[i] =
-                    (k_phi * lambda * (s.phase_cycles[i] - zij) + k_code * s.code_m[i]) / kappa;
+                let zij: T = real(f64::from(fixed[i][j]));
+                range_diff[i] = (k_phi * cfg.wavelength_m * (s.phase_cycles[i] - bias[i] - zij)
+                    + k_code * s.code_m[i])
+                    / kappa;
             }
             ranges.push(SatelliteRanges {
                 id: s.id,
                 los: s.los,
                 range_diff,
-                sigma: sigma_fixed(s.cofactor),
+                sigma: (s.cofactor / kappa).sqrt(),
             })?;
         }
-        let solution = self.solver.solve(&ranges)?;
-        Ok(AmbiguityFix {
+        Ok(ranges)
+    }
+
+    /// The line biases (cycles) and their σ from the fixed phases: per baseline the joint
+    /// weighted least squares of `(a_i, b_i)` with rows `[s_jᵀ/λ, 1]`.
+    fn line_biases<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        fixed: &[[i32; N]; M],
+    ) -> Result<([T; M], [T; M]), AmbiguityError> {
+        let lambda = self.config.wavelength_m;
+        let var_phi = self.config.phase_sigma_m * self.config.phase_sigma_m / (lambda * lambda);
+        let mut normal = Matrix4::<T>::zeros();
+        for s in sats {
+            let row = Vector4::new(
+                s.los.x / lambda,
+                s.los.y / lambda,
+                s.los.z / lambda,
+                T::one(),
+            );
+            normal += row * row.transpose() / s.cofactor;
+        }
+        let chol = normal
+            .cholesky()
+            .ok_or(SnapshotError::CoplanarLineOfSight)?;
+        let cov = chol.inverse();
+        let mut bias = [T::zero(); M];
+        let mut sigma = [T::zero(); M];
+        for i in 0..M {
+            let mut rhs = Vector4::zeros();
+            for (j, s) in sats.iter().enumerate().take(N) {
+                let row = Vector4::new(
+                    s.los.x / lambda,
+                    s.los.y / lambda,
+                    s.los.z / lambda,
+                    T::one(),
+                );
+                let zij: T = real(f64::from(fixed[i][j]));
+                rhs += row * ((s.phase_cycles[i] - zij) / s.cofactor);
+            }
+            let x = chol.solve(&rhs);
+            bias[i] = x[3];
+            sigma[i] = (cov[(3, 3)] * var_phi).sqrt();
+        }
+        Ok((bias, sigma))
+    }
+}
+
+impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
+    /// The attitude covariance the biases' uncertainty adds (the snapshot's own treats them
+    /// as known): `Σ_i Δθ_i Δθ_iᵀ`, with `Δθ_i` the attitude's change when bias `i` moves by
+    /// its σ (one more solve per baseline).
+    fn bias_sensitivity<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        fixed: &[[i32; N]; M],
+        bias: &[T; M],
+        sigma: &[T; M],
+        solution: &SnapshotSolution<T>,
+    ) -> Result<Matrix3<T>, AmbiguityError> {
+        let mut extra = Matrix3::zeros();
+        for i in 0..M {
+            let mut moved = *bias;
+            moved[i] += sigma[i];
+            let s = self
+                .solver
+                .solve(&self.fixed_ranges(sats, fixed, &moved)?)?;
+            let d = (solution.q_rb.conjugate() * s.q_rb).to_rotation_vector();
+            extra += d * d.transpose();
+        }
+        Ok(extra)
+    }
+
+    /// The line biases (cycles) at a solved attitude: per baseline the weighted mean of
+    /// `φ_ij − z_ij − s_jᵀ C b_i / λ`, and their σ from the phase noise of that mean and the
+    /// attitude's covariance along the mean line of sight.
+    fn line_biases_at<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        fixed: &[[i32; N]; M],
+        solution: &SnapshotSolution<T>,
+    ) -> ([T; M], [T; M]) {
+        let lambda = self.config.wavelength_m;
+        let var_phi = self.config.phase_sigma_m * self.config.phase_sigma_m / (lambda * lambda);
+        let baselines = self.solver.baselines().as_array();
+        let mut bias = [T::zero(); M];
+        let mut sigma = [T::zero(); M];
+        let weight: T = sats
+            .iter()
+            .fold(T::zero(), |w, s| w + T::one() / s.cofactor);
+        let mean_los = sats
+            .iter()
+            .fold(Vector3::zeros(), |m, s| m + s.los / s.cofactor)
+            / weight;
+        for i in 0..M {
+            let a = solution.c_rb * baselines[i];
+            let mut sum = T::zero();
+            for (j, s) in sats.iter().enumerate().take(N) {
+                let zij: T = real(f64::from(fixed[i][j]));
+                sum += (s.phase_cycles[i] - zij - s.los.dot(&a) / lambda) / s.cofactor;
+            }
+            bias[i] = sum / weight;
+            // δ(sᵀ C b) = sᵀ C (δθ × b) = δθ · (b × Cᵀ s)
+            let g = baselines[i].cross(&(solution.c_rb.transpose() * mean_los)) / lambda;
+            let attitude_var = (g.transpose() * solution.covariance * g).x;
+            sigma[i] = (var_phi / weight + attitude_var).sqrt();
+        }
+        (bias, sigma)
+    }
+}
+
+/// A fix whose single differences carried unknown line biases
+/// ([`AmbiguityResolver::resolve_with_line_biases`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BiasedFix<const M: usize, const N: usize, T = f32> {
+    /// The integers (zero for the reference satellite) and the attitude.
+    pub fix: AmbiguityFix<M, N, T>,
+    /// The line bias of each baseline, cycles (`φ − b − z = sᵀa/λ`).
+    pub line_bias_cycles: [T; M],
+    /// Their standard deviations, cycles.
+    pub line_bias_sigma_cycles: [T; M],
+    /// Id of the reference satellite (whose integers are zero).
+    pub reference: u8,
+}
+
+/// Factor on the line biases' σ at the solved attitude (which treats the biases as known).
+const BIAS_SIGMA_FACTOR: f64 = 1.7;
+
+/// The gate used when the χ² table has no entry (never in practice).
+const UNBOUNDED_GATE: f64 = 1e9;
+
+/// What the search found, before the attitude is solved.
+struct SearchFigures<T> {
+    cost: T,
+    second_cost: T,
+    ratio: T,
+    ratio_is_lower_bound: bool,
+    nodes: u32,
+    candidates: u32,
+}
+
+impl<T: Real> SearchFigures<T> {
+    fn fix<const M: usize, const N: usize>(
+        &self,
+        ambiguities: [[i32; N]; M],
+        solution: SnapshotSolution<T>,
+    ) -> AmbiguityFix<M, N, T> {
+        AmbiguityFix {
             ambiguities,
             solution,
-            cost: best.cost,
-            second_cost,
-            ratio,
-            nodes: outcome.nodes,
-            candidates: outcome.evaluated,
-        })
+            cost: self.cost,
+            second_cost: self.second_cost,
+            ratio: self.ratio,
+            ratio_is_lower_bound: self.ratio_is_lower_bound,
+            nodes: self.nodes,
+            candidates: self.candidates,
+        }
     }
+}
+
+/// The best candidate and what validated it.
+struct Verdict<const M: usize, const N: usize, T> {
+    z: [[T; N]; M],
+    cost: T,
+    second_cost: T,
+    ratio: T,
+    ratio_is_lower_bound: bool,
+}
+
+/// Float solution shifted by the nearest integers: `shift`, the remainder `ẑ − shift`, and
+/// the conditional baselines at `z = shift`.
+struct FloatSolution<const M: usize, const N: usize, T> {
+    shift: [[T; N]; M],
+    zfloat: [[T; N]; M],
+    a_shift: [Vector3<T>; M],
+}
+
+/// The float model of one epoch: per integer `j` its design vector `d_j` (a line of sight for
+/// single differences, `s_j − s_r` for double differences), the cofactor matrix `C` and its
+/// inverse `W`, the phases (cycles) and codes (m) per baseline, and `N = S W Sᵀ`.
+struct FloatModel<const M: usize, const N: usize, T> {
+    n: usize,
+    design: [Vector3<T>; N],
+    cofactor: SMatrix<T, N, N>,
+    weight: SMatrix<T, N, N>,
+    phase: [[T; N]; M],
+    code: [[T; N]; M],
+    info: Matrix3<T>,
+    info_inv: Matrix3<T>,
+}
+
+impl<T: Real> AmbiguityConfig<T> {
+    fn k_phi(&self) -> T {
+        T::one() / (self.phase_sigma_m * self.phase_sigma_m)
+    }
+    fn k_code(&self) -> T {
+        T::one() / (self.code_sigma_m * self.code_sigma_m)
+    }
+    fn kappa(&self) -> T {
+        self.k_phi() + self.k_code()
+    }
+}
+
+/// The satellite with the smallest cofactor (the double differences' reference).
+fn best_satellite<const M: usize, T: Real>(sats: &[PhaseSatellite<M, T>]) -> Option<usize> {
+    let mut best: Option<(usize, T)> = None;
+    for (j, s) in sats.iter().enumerate() {
+        if best.is_none_or(|(_, c)| s.cofactor < c) {
+            best = Some((j, s.cofactor));
+        }
+    }
+    best.map(|(j, _)| j)
+}
+
+// index loops mirror the equations of the method
+#[allow(clippy::needless_range_loop)]
+impl<const M: usize, const N: usize, T: Real> FloatModel<M, N, T> {
+    /// Single differences: `d_j = s_j`, `C = diag(c_j)`.
+    fn single_differences(obs: &PhaseObservations<M, N, T>) -> Result<Self, SnapshotError> {
+        let n = obs.satellites().len().min(N);
+        let sats = obs.satellites().get(..n).unwrap_or(&[]);
+        let mut model = Self::empty(n);
+        for (j, s) in sats.iter().enumerate().take(N) {
+            model.design[j] = s.los;
+            model.cofactor[(j, j)] = s.cofactor;
+            model.weight[(j, j)] = T::one() / s.cofactor;
+            for i in 0..M {
+                model.phase[i][j] = s.phase_cycles[i];
+                model.code[i][j] = s.code_m[i];
+            }
+        }
+        model.normal()
+    }
+
+    /// Double differences against satellite `r`: `d = s_j − s_r`, `C_jl = c_j δ_jl + c_r`.
+    fn double_differences(sats: &[PhaseSatellite<M, T>], r: usize) -> Result<Self, SnapshotError> {
+        let reference = sats.get(r).ok_or(SnapshotError::TooFewSatellites)?;
+        let n = sats.len().saturating_sub(1).min(N);
+        let mut model = Self::empty(n);
+        let others = sats
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != r)
+            .map(|(_, s)| s);
+        for (j, s) in others.enumerate().take(n) {
+            // (j < n ≤ N; the check lets the compiler see it through the filter)
+            if j >= N {
+                break;
+            }
+            model.design[j] = s.los - reference.los;
+            for i in 0..M {
+                model.phase[i][j] = s.phase_cycles[i] - reference.phase_cycles[i];
+                model.code[i][j] = s.code_m[i] - reference.code_m[i];
+            }
+            for l in 0..n {
+                model.cofactor[(j, l)] = reference.cofactor;
+            }
+            model.cofactor[(j, j)] += s.cofactor;
+        }
+        // W = C⁻¹ on the block in use (identity beyond it)
+        let mut c = SMatrix::<T, N, N>::identity();
+        for j in 0..n {
+            for l in 0..n {
+                c[(j, l)] = model.cofactor[(j, l)];
+            }
+        }
+        model.weight = c
+            .cholesky()
+            .map(|f| f.inverse())
+            .ok_or(SnapshotError::InvalidNoise)?;
+        for j in n..N {
+            model.weight[(j, j)] = T::zero();
+        }
+        model.normal()
+    }
+
+    fn empty(n: usize) -> Self {
+        Self {
+            n,
+            design: [Vector3::zeros(); N],
+            cofactor: SMatrix::zeros(),
+            weight: SMatrix::zeros(),
+            phase: [[T::zero(); N]; M],
+            code: [[T::zero(); N]; M],
+            info: Matrix3::zeros(),
+            info_inv: Matrix3::zeros(),
+        }
+    }
+
+    /// The integers in use (`n ≤ N` by construction; the clamp lets the compiler see it).
+    fn dim(&self) -> usize {
+        self.n.min(N)
+    }
+
+    /// `N = S W Sᵀ` and its inverse (the lines of sight must span three dimensions).
+    fn normal(mut self) -> Result<Self, SnapshotError> {
+        if self.n < 3 {
+            return Err(SnapshotError::TooFewSatellites);
+        }
+        let mut info = Matrix3::zeros();
+        for j in 0..self.dim() {
+            for l in 0..self.dim() {
+                info += self.design[j] * self.design[l].transpose() * self.weight[(j, l)];
+            }
+        }
+        let mean = info.trace() / real(3.0);
+        if !(mean > T::zero()) || !mean.is_finite() {
+            return Err(SnapshotError::Numerical);
+        }
+        if !(info.determinant() / (mean * mean * mean) >= real(MIN_LOS_SHAPE)) {
+            return Err(SnapshotError::CoplanarLineOfSight);
+        }
+        self.info_inv = info
+            .cholesky()
+            .map(|c| c.inverse())
+            .ok_or(SnapshotError::CoplanarLineOfSight)?;
+        self.info = info;
+        Ok(self)
+    }
+
+    /// `S W v` for a vector `v` over the integers.
+    fn s_w(&self, v: &[T; N]) -> Vector3<T> {
+        let mut out = Vector3::zeros();
+        for j in 0..self.dim() {
+            let mut wv = T::zero();
+            for l in 0..self.dim() {
+                wv += self.weight[(j, l)] * v[l];
+            }
+            out += self.design[j] * wv;
+        }
+        out
+    }
+
+    /// Step 1: `â_i = N⁻¹ S W p_i`, `ẑ_ij = φ_ij − d_j·â_i/λ` shifted by its nearest integer,
+    /// and `ǎ_i` at `z = shift`: `N⁻¹ S W (κ_φ λ(φ − shift) + κ_p p) / κ`.
+    fn float_solution(&self, cfg: &AmbiguityConfig<T>) -> FloatSolution<M, N, T> {
+        let (lambda, k_phi, k_code, kappa) =
+            (cfg.wavelength_m, cfg.k_phi(), cfg.k_code(), cfg.kappa());
+        let mut out = FloatSolution {
+            shift: [[T::zero(); N]; M],
+            zfloat: [[T::zero(); N]; M],
+            a_shift: [Vector3::zeros(); M],
+        };
+        for i in 0..M {
+            let a_code = self.info_inv * self.s_w(&self.code[i]);
+            let mut r = [T::zero(); N];
+            for j in 0..self.dim() {
+                let zf = self.phase[i][j] - self.design[j].dot(&a_code) / lambda;
+                let sh = zf.round();
+                out.shift[i][j] = sh;
+                out.zfloat[i][j] = zf - sh;
+                r[j] =
+                    (k_phi * lambda * (self.phase[i][j] - sh) + k_code * self.code[i][j]) / kappa;
+            }
+            out.a_shift[i] = self.info_inv * self.s_w(&r);
+        }
+        out
+    }
+
+    /// `Q₁ = (σ_φ² C + σ_p² Sᵀ N⁻¹ S) / λ²` (identity beyond the integers in use).
+    fn float_covariance(&self, cfg: &AmbiguityConfig<T>) -> SMatrix<T, N, N> {
+        let (var_phi, var_code) = (
+            cfg.phase_sigma_m * cfg.phase_sigma_m,
+            cfg.code_sigma_m * cfg.code_sigma_m,
+        );
+        let l2 = cfg.wavelength_m * cfg.wavelength_m;
+        let mut q1 = SMatrix::<T, N, N>::identity();
+        for j in 0..self.dim() {
+            for l in 0..self.dim() {
+                let v = var_code * self.design[j].dot(&(self.info_inv * self.design[l]))
+                    + var_phi * self.cofactor[(j, l)];
+                q1[(j, l)] = v / l2;
+            }
+        }
+        q1
+    }
+
+    /// `T_a = (λ κ_φ / κ) N⁻¹ S W Z⁻ᵀ`: `ǎ_i(z') = ǎ_i(shift) − T_a z'_i`.
+    fn baseline_sensitivity(
+        &self,
+        cfg: &AmbiguityConfig<T>,
+        dec: &Decorrelation<N, T>,
+    ) -> [Vector3<T>; N] {
+        let scale = cfg.wavelength_m * cfg.k_phi() / cfg.kappa();
+        let mut t_a = [Vector3::zeros(); N];
+        for (c, col) in t_a.iter_mut().enumerate().take(self.dim()) {
+            let mut column = [T::zero(); N];
+            for (j, v) in column.iter_mut().enumerate().take(self.dim()) {
+                *v = dec.z_inv_t[(j, c)];
+            }
+            *col = self.info_inv * self.s_w(&column) * scale;
+        }
+        t_a
+    }
+}
+
+/// Smallest `det N / (tr N / 3)³` of the normal matrix: below, the design vectors span less
+/// than three dimensions.
+const MIN_LOS_SHAPE: f64 = 1e-5;
+
+/// Step 2's transform of the floats: `ẑ' = Zᵀ ẑ` per baseline.
+#[allow(clippy::needless_range_loop)] // index loops mirror the equations
+fn transformed_floats<const M: usize, const N: usize, T: Real>(
+    dec: &Decorrelation<N, T>,
+    zfloat: &[[T; N]; M],
+) -> [[T; N]; M] {
+    let n = dec.n.min(N);
+    let mut zhat = [[T::zero(); N]; M];
+    for i in 0..M {
+        for c in 0..n {
+            let mut v = T::zero();
+            for j in 0..n {
+                v += dec.z[(j, c)] * zfloat[i][j];
+            }
+            zhat[i][c] = v;
+        }
+    }
+    zhat
+}
+
+/// The fixed integers `z = shift + Z⁻ᵀ z'`.
+#[allow(clippy::needless_range_loop)] // index loops mirror the equations
+fn fixed_integers<const M: usize, const N: usize, T: Real>(
+    n: usize,
+    shift: &[[T; N]; M],
+    dec: &Decorrelation<N, T>,
+    best: &[[T; N]; M],
+) -> [[i32; N]; M] {
+    let n = n.min(N);
+    let mut out = [[0i32; N]; M];
+    for i in 0..M {
+        for j in 0..n {
+            let mut zij = shift[i][j];
+            for c in 0..n {
+                zij += dec.z_inv_t[(j, c)] * best[i][c];
+            }
+            out[i][j] = to_i32(zij);
+        }
+    }
+    out
 }
 
 /// Forward `LDLᵀ` of a small SPD matrix: `A = L D Lᵀ`, `L` unit lower triangular.

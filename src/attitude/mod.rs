@@ -44,6 +44,7 @@ pub mod dcm_filter;
 pub mod direction_cosine;
 pub mod example;
 pub mod filter_estimate;
+pub mod gyro_aided;
 mod integer_search;
 pub mod lambda;
 pub mod multi_structure;

@@ -10,7 +10,7 @@
 //! let mut receiver = AttitudeReceiver::new(ExampleFlight::config(true))?;
 //! flight.fly(&mut receiver, 0, 600)?; // 0.6 s: cold start, then the fine filter
 //! let att = receiver.attitude();
-//! assert_eq!(att.source, AttitudeSource::OneStage);
+//! assert_eq!(att.source, AttitudeSource::Fine);
 //! let truth = flight.attitude(att.epoch);
 //! assert!(att.q_rb.angle_to(&truth) < 0.2f32.to_radians());
 //! # Ok::<(), gnss_attitude::receiver::ReceiverError>(())
@@ -34,6 +34,8 @@ pub const NOISE_SIGMA: f32 = 40.0;
 pub const EPOCH_S: f32 = 1e-3;
 /// Gyro sample interval, s.
 pub const GYRO_H: f32 = 0.01;
+/// The line biases of B and C the flight's front end adds, rad.
+pub const LINE_BIAS_RAD: [f32; 2] = [0.7, -1.2];
 /// The body rate, body axes, rad/s.
 pub const BODY_RATE: [f32; 3] = [0.004, -0.003, 0.0105];
 
@@ -61,6 +63,8 @@ pub struct ExampleFlight {
     pub antenna_gain: [f32; 3],
     /// Data-sign inversion of one satellite from an epoch on: `(satellite index, epoch)`.
     pub bit_flip: Option<(usize, u64)>,
+    /// Line biases of B and C (the phase their RF chains add), rad: unknown to the receiver.
+    pub line_bias: [f32; 2],
 }
 
 impl ExampleFlight {
@@ -73,6 +77,7 @@ impl ExampleFlight {
             phase_offset: [[0.0; 3]; 8],
             antenna_gain: [1.0; 3],
             bit_flip: None,
+            line_bias: LINE_BIAS_RAD,
         }
     }
 
@@ -147,7 +152,9 @@ impl ExampleFlight {
             }
             let [pa, _, _] = positions;
             let psi_a = k * los.dot(&(c_rb * pa));
-            let offsets = self.phase_offset.get(i).copied().unwrap_or([0.0; 3]);
+            let mut offsets = self.phase_offset.get(i).copied().unwrap_or([0.0; 3]);
+            offsets[1] += self.line_bias[0];
+            offsets[2] += self.line_bias[1];
             let mut prompt = PromptIq::default();
             let outputs = prompt.i.iter_mut().zip(prompt.q.iter_mut());
             let antennas = positions

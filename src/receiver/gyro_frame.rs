@@ -40,6 +40,10 @@ const W0_PRIOR_WEIGHT: f32 = 0.5;
 pub type BiasCalibrator =
     GyroCalibrator<BiasOnly, NoReferenceDrift, SqrtInformation<6>, 3, 0, 6, f32>;
 
+/// Largest increment (rad, any axis) a sample may hold: beyond, it is refused as an input
+/// error (below, above the maximum rate, it is a gyro fault).
+const MAX_INCREMENT_RAD: f32 = 1.0;
+
 /// The receiver's gyro.
 #[derive(Clone, Debug)]
 pub(crate) struct GyroFrame {
@@ -69,7 +73,8 @@ pub struct CalibrationReport {
     pub started: u32,
     /// Windows solved.
     pub solved: u32,
-    /// Windows whose estimate was applied.
+    /// Windows whose estimate was determined well enough to count (σ below the configured
+    /// limit); the estimate is reported and compared, the fine filter applies its own.
     pub applied: u32,
     /// Windows abandoned (a reference or an increment the calibrator refused, or a solve
     /// that failed: rank deficient, not converged).
@@ -130,14 +135,27 @@ impl GyroFrame {
 
     /// Takes one increment (rad, gyro axes): corrected by the bias estimate, propagated, and
     /// passed (uncorrected; the calibrator applies the correction itself) to the calibrator.
-    pub fn push(&mut self, theta: &Vector3<f32>) -> Result<(), ReceiverError> {
+    /// An increment above the maximum rate is a fault: the last good rate is propagated
+    /// instead, the calibration window is abandoned, and `false` is returned.
+    pub fn push(&mut self, theta: &Vector3<f32>) -> Result<bool, ReceiverError> {
+        if !theta.iter().all(|v| v.is_finite()) {
+            return Err(ReceiverError::NonFinite);
+        }
+        if theta.amax() > MAX_INCREMENT_RAD {
+            return Err(ReceiverError::Gyro(CalibrationError::InputOutOfRange));
+        }
         let h = self.config.sample_interval_s;
-        let corrected = theta - self.bias * h;
+        let plausible = theta.amax() <= self.config.max_rate_rad_s * h;
+        let corrected = if plausible {
+            theta - self.bias * h
+        } else {
+            self.rate * h
+        };
         let mut propagator = self.propagator;
         let step = propagator.push(&corrected).map_err(map_calibration)?;
         let mut calibrator = self.calibrator.clone();
         if let Some(c) = calibrator.as_mut() {
-            if c.push_increment(theta).is_err() {
+            if !plausible || c.push_increment(theta).is_err() {
                 calibrator = None;
                 self.report.failed += 1;
             }
@@ -147,15 +165,15 @@ impl GyroFrame {
         if let Some(s) = step {
             self.rate = s.rotation_vector / (2.0 * h);
         }
-        self.samples += 1;
-        Ok(())
+        self.samples = self.samples.saturating_add(1);
+        Ok(plausible)
     }
 
     /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate.
     pub fn attitude_at(&self, t: f64) -> Quaternion<f32> {
         let h = seconds(self.config.sample_interval_s);
         // the propagator holds M at the last completed step
-        let step_samples = self.samples - (self.samples % 2);
+        let step_samples = self.samples - self.samples % 2;
         let t_step = step_samples as f64 * h;
         let dt = (t - t_step) as f32;
         let m = self.propagator.attitude() * Quaternion::from_rotation_vector(&(self.rate * dt));
@@ -224,7 +242,8 @@ impl GyroFrame {
                 return false;
             }
         }
-        let elapsed = (self.samples - self.window_start) as f32 * self.config.sample_interval_s;
+        let elapsed =
+            self.samples.saturating_sub(self.window_start) as f32 * self.config.sample_interval_s;
         if elapsed < self.config.calibration_window_s {
             self.calibrator = Some(c);
             return false;
@@ -240,7 +259,7 @@ impl GyroFrame {
                         .iter()
                         .all(|&s| s <= self.config.calibration_max_sigma);
                 if usable {
-                    self.bias = est.c;
+                    // reported (the fine filter estimates the bias it applies itself)
                     self.calibrations += 1;
                     self.report.applied += 1;
                 }

@@ -23,8 +23,8 @@ use heapless::Vec;
 
 use super::config::ConfigError;
 use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
-use crate::attitude::one_stage::{AdapterConfig, EpochClock, ObservationAdapter};
 use crate::receiver::ReceiverError;
+use crate::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use crate::signal::{Prn, SampleBlock};
 use crate::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, SearchResult,

@@ -20,10 +20,8 @@ use gnss_attitude::gyro::{
     default_rank_tolerance, CalibratorConfig, EpochOutcome, LeastSquaresAccumulator,
     NormalEquations, PaperCalibrator, SqrtInformation,
 };
-use gnss_attitude::attitude::one_stage::{
-    AdapterConfig, EpochClock, ObservationAdapter, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
-    PromptIq, SatelliteObservation, MAX_SATELLITES,
-};
+use gnss_attitude::attitude::one_stage::{EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior, PromptIq, SatelliteObservation, MAX_SATELLITES};
+use gnss_attitude::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use gnss_attitude::geometry::Paper003Angles;
 use gnss_attitude::signal::selftest::{
     run_correlator_self_test, signal_self_test_samples, SIGNAL_SELF_TEST_LEN, SIGNAL_SELF_TEST_RATE_HZ,

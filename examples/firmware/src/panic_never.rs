@@ -25,11 +25,8 @@ use gnss_attitude::gyro::{
     GyroCalibrator, LeastSquaresAccumulator, NormalEquations, PaperCalibrator, PulseDecoder,
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
 };
-use gnss_attitude::attitude::one_stage::{
-    observation_from_epoch, satellite_terms, AdapterConfig, AntennaMapping, BesselRatio, EpochClock,
-    ObservationAdapter, PhaseDifferences, FilterMode, OneStageConfig, OneStageFilter, Prior,
-    SatelliteObservation, MAX_SATELLITES,
-};
+use gnss_attitude::attitude::one_stage::{satellite_terms, BesselRatio, PhaseDifferences, FilterMode, OneStageConfig, OneStageFilter, Prior, SatelliteObservation, MAX_SATELLITES};
+use gnss_attitude::receiver::{observation_from_epoch, AdapterConfig, AntennaMapping, EpochClock, ObservationAdapter};
 use gnss_attitude::frontend::nt1065::{Nt1065, Nt1065Config};
 use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
 use gnss_attitude::tracking::acquisition::detection_threshold;

@@ -28,10 +28,10 @@
 //!
 //! # From the signal chain (samples → attitude)
 //!
-//! The [`adapter`] turns the tracking channels' [`TrackingEpoch`](crate::tracking::TrackingEpoch)s
-//! into observations ([`ObservationAdapter`]: antenna mapping, sign of Q, per-antenna noise
-//! normalization from the noise taps, lock and C/N0 gating) and groups them into filter epochs
-//! ([`EpochClock`]). A cold start averages the inter-antenna phases ([`PhaseDifferences`]),
+//! The receiver's adapter ([`crate::receiver::ObservationAdapter`]) turns the tracking
+//! channels' [`TrackingEpoch`](crate::tracking::TrackingEpoch)s into observations (antenna
+//! mapping, sign of Q, per-antenna noise normalization from the noise taps, lock and C/N0
+//! gating) and groups them into filter epochs ([`crate::receiver::EpochClock`]). A cold start averages the inter-antenna phases ([`PhaseDifferences`]),
 //! solves them with the snapshot solver's ambiguity resolver and starts from
 //! [`Prior::from_snapshot`]. Per receiver:
 //!
@@ -82,9 +82,6 @@
 //! information is independent of the biases), which the filter recovers over time because the
 //! biases are constant while the attitude moves.
 
-pub mod adapter;
-#[cfg(test)]
-mod adapter_tests;
 pub mod bessel;
 mod cold_start;
 mod config;
@@ -102,10 +99,6 @@ mod update;
 #[cfg(test)]
 mod tests;
 
-pub use adapter::{
-    observation_from_epoch, AdapterConfig, AntennaMapping, EpochClock, NoiseFloor,
-    ObservationAdapter, QuadratureSign,
-};
 pub use bessel::BesselRatio;
 pub use cold_start::PhaseDifferences;
 pub use config::{EstimatedAngles, FilterMode, OneStageConfig, ProcessNoise, GPS_L1_WAVELENGTH_M};

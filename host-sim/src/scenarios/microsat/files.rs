@@ -16,9 +16,8 @@ fn source_code(s: AttitudeSource) -> f64 {
     match s {
         AttitudeSource::None => 0.0,
         AttitudeSource::Snapshot => 1.0,
-        AttitudeSource::OneStage => 2.0,
+        AttitudeSource::Fine => 2.0,
         AttitudeSource::GyroCoast => 3.0,
-        AttitudeSource::RigidBody => 4.0,
     }
 }
 

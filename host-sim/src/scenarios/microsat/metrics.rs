@@ -169,7 +169,7 @@ fn stages(
     let samples = &record.samples;
     let fine_samples = stage_samples(
         samples,
-        |s| s.fine_locked && s.source == AttitudeSource::OneStage,
+        |s| s.fine_locked && s.source == AttitudeSource::Fine,
         true,
     );
     let mut fine = stage_stats(
@@ -296,7 +296,7 @@ pub fn deg(v: &Vector3<f64>) -> [f64; 3] {
 /// error inside 3σ on every axis for at least `hold` seconds; seconds after `from`.
 pub fn attitude_recovery(samples: &[Sample], from: f64, hold: f64) -> Option<f64> {
     let ok = |s: &Sample| {
-        s.source == AttitudeSource::OneStage
+        s.source == AttitudeSource::Fine
             && (0..3).all(|a| s.error[a].abs() <= 3.0 * s.sigma[a].max(1e-9))
     };
     let mut start: Option<f64> = None;

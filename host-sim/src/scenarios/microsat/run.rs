@@ -192,9 +192,8 @@ pub fn receiver_config(world: &World, loop_bandwidth_hz: f32) -> ReceiverConfig 
         GYRO_H as f32,
         GyroErrors::mems().pulse_weight.map(|p| p as f32),
     );
+    // the line biases are unknown to the receiver: it resolves and estimates them
     let mut c = ReceiverConfig::gps_l1(antennas, Some(gyro));
-    let b = world.line_bias_rad;
-    c.line_bias_rad = [(b[1] - b[0]) as f32, (b[2] - b[0]) as f32];
     c.fine.loop_bandwidth_hz = loop_bandwidth_hz;
     c
 }
@@ -664,9 +663,9 @@ fn record_sample(
     let truth = world.motion.q_ib(t);
     let has = att.source != AttitudeSource::None;
     let (fine_error, fine_locked) = match receiver.fine_estimate() {
-        Some((e, lock)) => (
+        Some(e) => (
             attitude_error(&e.q_rb, &truth),
-            lock == gnss_attitude::attitude::one_stage::LockStatus::Locked,
+            att.source == AttitudeSource::Fine,
         ),
         None => (nan3(), false),
     };
