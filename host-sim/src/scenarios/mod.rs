@@ -189,3 +189,23 @@ pub fn listing() -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scenario_has_variants_with_distinct_names_and_a_default() {
+        for sc in SCENARIOS {
+            let names: Vec<&str> = sc.variants.names().iter().map(|v| v.0).collect();
+            assert!(!names.is_empty(), "{}", sc.name);
+            let mut unique = names.clone();
+            unique.sort_unstable();
+            unique.dedup();
+            assert_eq!(unique.len(), names.len(), "{}: {names:?}", sc.name);
+            assert_eq!(sc.variant(None).unwrap(), names[0]);
+            assert!(sc.variant(Some("no-such-variant")).is_err());
+        }
+        assert!(find(DEFAULT_SCENARIO).is_ok());
+    }
+}
