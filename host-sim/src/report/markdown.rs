@@ -87,12 +87,26 @@ fn cell(s: &str) -> String {
     s.trim().replace('|', "\\|").replace('\n', " ")
 }
 
+/// A figure quoted from a paper, as printed (no digits added): numbers in their shortest
+/// form, arrays joined by " / ".
+pub fn quoted_text(v: &Value) -> String {
+    match v {
+        Value::Number(n) => n.to_string(),
+        Value::Array(items) => items
+            .iter()
+            .map(quoted_text)
+            .collect::<Vec<_>>()
+            .join(" / "),
+        other => value_text(other),
+    }
+}
+
 /// The paper's figure for top-level metric `name`: `paper[name]`, or `paper.paper[name]`.
 fn paper_figure(paper: &Value, name: &str) -> String {
     paper
         .get(name)
         .or_else(|| paper.get("paper").and_then(|p| p.get(name)))
-        .map_or_else(String::new, value_text)
+        .map_or_else(String::new, quoted_text)
 }
 
 fn collect<'a>(
@@ -212,7 +226,7 @@ fn write_paper(s: &mut String, paper: &Value) {
                 }
             }
             other => {
-                let _ = writeln!(s, "* `{name}`: {}", value_text(other));
+                let _ = writeln!(s, "* `{name}`: {}", quoted_text(other));
             }
         }
     }
@@ -296,7 +310,7 @@ mod tests {
             wall_s: 1.5,
         })
         .unwrap();
-        o.paper = serde_json::json!({"count": 4, "note": "n"});
+        o.paper = serde_json::json!({"count": 4, "note": "n", "x": [0.282, 1.5e-6]});
         let r = render(&o).unwrap();
         assert!(r
             .results
@@ -306,6 +320,7 @@ mod tests {
             .results
             .contains("| name | at_s (s) |\n|---|---|\n| a | 2.000 |"));
         assert!(r.results.contains("* `note`: n"));
+        assert!(r.results.contains("* `x`: 0.282 / 1.5e-6"), "{}", r.results);
         assert!(!r.results.contains("wall_s"));
         assert_eq!(
             r.wall_times,
