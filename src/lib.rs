@@ -81,6 +81,7 @@ pub mod frontend;
 pub mod geometry;
 pub mod gyro;
 pub mod linalg;
+pub mod nav;
 pub mod noise;
 pub mod receiver;
 pub mod selftest;

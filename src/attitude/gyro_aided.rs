@@ -109,6 +109,12 @@ pub struct GyroAidedReport<T = f32> {
     pub rejected_nis_sum: T,
     /// The gyro bias correction the caller must add to the bias it applies, rad/s.
     pub bias_correction: Vector3<T>,
+    /// The attitude correction the update applied (body frame, rad).
+    pub attitude_correction: Vector3<T>,
+    /// Its covariance when the filter is consistent, `P⁻_θθ − P⁺_θθ`, rad². A gyro that
+    /// errs beyond its noise model forces corrections far larger than this (the test of
+    /// the gyro against the carrier phase).
+    pub correction_covariance: Matrix3<T>,
 }
 
 /// Error returned by the operations of [`GyroAidedFilter`]; the filter is then unchanged.
@@ -371,12 +377,15 @@ impl<T: Real> GyroAidedFilter<T> {
         let c_rb = self.attitude(m).to_dcm();
         let gate = self.config.gate.map(|g| NisGate::chi_square(2, g));
         let mut next = self.clone();
+        let prior_attitude = next.attitude_covariance();
         let mut report = GyroAidedReport {
             offered: 0,
             accepted: 0,
             nis_sum: T::zero(),
             rejected_nis_sum: T::zero(),
             bias_correction: Vector3::zeros(),
+            attitude_correction: Vector3::zeros(),
+            correction_covariance: Matrix3::zeros(),
         };
         for block in blocks {
             let (y, h) = next.linearize(&c_rb, block);
@@ -389,6 +398,10 @@ impl<T: Real> GyroAidedFilter<T> {
                 report.rejected_nis_sum += r.nis;
             }
         }
+        let x = next.ekf.state();
+        report.attitude_correction = Vector3::new(x[0], x[1], x[2]);
+        let c = prior_attitude - next.attitude_covariance();
+        report.correction_covariance = (c + c.transpose()) * real::<T>(0.5);
         report.bias_correction = next.fold(m)?;
         *self = next;
         Ok(report)

@@ -83,14 +83,14 @@ impl AttitudeReceiver {
         if let Some(g) = self.gyro.as_mut() {
             g.bias += report.bias_correction;
         }
+        let gyro_wrong = self.integrity.add_block(report);
         if offered > 0 {
             self.health.satellites_used = report.accepted;
-            self.integrity.add_block(report);
         }
         if let Some(f) = &self.fine {
             self.line_bias = f.line_bias();
         }
-        if self.integrity.residuals_inconsistent() && !self.health.gyro_excluded {
+        if (gyro_wrong || self.integrity.residuals_inconsistent()) && !self.health.gyro_excluded {
             self.exclude_gyro(k);
         }
     }

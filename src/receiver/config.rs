@@ -149,8 +149,8 @@ pub struct ReceiverConfig {
 }
 
 impl ReceiverConfig {
-    /// GPS L1 C/A with 1 ms epochs, 20 ms fine blocks, 100 ms windows, a snapshot and an
-    /// integrity check every second, unknown line biases, a 1 Hz loop when there is no gyro,
+    /// GPS L1 C/A with 1 ms epochs, 20 ms fine blocks, 100 ms windows, a snapshot check every
+    /// window and a fresh-fix integrity check every second, unknown line biases, a 1 Hz loop when there is no gyro,
     /// 0.6 mm single differences at the resolver's reference, a ratio test of 3, and the given
     /// antennas and gyro.
     pub fn gps_l1(antennas_m: [[f32; 3]; 3], gyro: Option<GyroConfig>) -> Self {
@@ -167,7 +167,7 @@ impl ReceiverConfig {
             epoch_s: 1e-3,
             window_epochs: 100,
             block_epochs: 20,
-            snapshot_windows: 10,
+            snapshot_windows: 1,
             integrity_windows: 10,
             fine,
             ambiguity,

@@ -180,6 +180,30 @@ impl ExampleFlight {
         out
     }
 
+    /// Epochs `from..to` without any signal (an eclipse of every antenna, a blockage): only
+    /// the gyro increments (when the receiver has a gyro), then the epochs are closed.
+    ///
+    /// # Errors
+    /// The receiver's.
+    pub fn coast(
+        &mut self,
+        receiver: &mut AttitudeReceiver,
+        from: u64,
+        to: u64,
+    ) -> Result<(), ReceiverError> {
+        let per_gyro = libm::roundf(GYRO_H / EPOCH_S) as u64;
+        if receiver.config().gyro.is_some() {
+            for k in (from..to).filter(|k| *k > 0 && k.checked_rem(per_gyro) == Some(0)) {
+                receiver.push_gyro_increment(
+                    &self.gyro_increment(k.checked_div(per_gyro).unwrap_or(1).saturating_sub(1)),
+                )?;
+                receiver.close_through(k.saturating_sub(1));
+            }
+        }
+        receiver.close_through(to.saturating_sub(1));
+        Ok(())
+    }
+
     /// Flies epochs `from..to` into `receiver`: aiding every 100 epochs, a gyro increment
     /// every 10 epochs (when the receiver has a gyro), the observations of every epoch; closes
     /// the epochs at the end.

@@ -40,6 +40,9 @@ const W0_PRIOR_WEIGHT: f32 = 0.5;
 pub type BiasCalibrator =
     GyroCalibrator<BiasOnly, NoReferenceDrift, SqrtInformation<6>, 3, 0, 6, f32>;
 
+/// Longest extrapolation of `M` beyond the last propagation step, s.
+pub(crate) const MAX_EXTRAPOLATION_S: f32 = 1.0;
+
 /// Largest increment (rad, any axis) a sample may hold: beyond, it is refused as an input
 /// error (below, above the maximum rate, it is a gyro fault).
 const MAX_INCREMENT_RAD: f32 = 1.0;
@@ -113,6 +116,27 @@ impl GyroFrame {
         self.samples as f64 * seconds(self.config.sample_interval_s)
     }
 
+    /// Re-anchors the gyro's clock at `t` seconds (after an epoch jump: the samples in between
+    /// never came) with `M` restarted at the identity; the bias and calibration report stay.
+    pub fn resync(&mut self, t: f64) {
+        let h = seconds(self.config.sample_interval_s);
+        let samples = if h > 0.0 { libm::floor(t / h) } else { 0.0 };
+        // an even count: the propagator starts on a step boundary
+        let samples = (samples.max(0.0) as u64) & !1;
+        self.samples = samples;
+        self.window_start = samples;
+        self.propagator =
+            AttitudePropagator::new(Quaternion::identity()).unwrap_or(self.propagator);
+        self.rate = Vector3::zeros();
+        self.calibrator = None;
+    }
+
+    /// The corrected rate of the last propagation step, rad/s, gyro axes (an implausible
+    /// sample repeats the last good one).
+    pub fn rate(&self) -> Vector3<f32> {
+        self.rate
+    }
+
     /// Increments received.
     pub fn samples(&self) -> u64 {
         self.samples
@@ -169,13 +193,15 @@ impl GyroFrame {
         Ok(plausible)
     }
 
-    /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate.
+    /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate (for at
+    /// most [`MAX_EXTRAPOLATION_S`] either way: a gyro that stopped delivering is excluded by
+    /// the receiver, not extrapolated).
     pub fn attitude_at(&self, t: f64) -> Quaternion<f32> {
         let h = seconds(self.config.sample_interval_s);
         // the propagator holds M at the last completed step
         let step_samples = self.samples - self.samples % 2;
         let t_step = step_samples as f64 * h;
-        let dt = (t - t_step) as f32;
+        let dt = ((t - t_step) as f32).clamp(-MAX_EXTRAPOLATION_S, MAX_EXTRAPOLATION_S);
         let m = self.propagator.attitude() * Quaternion::from_rotation_vector(&(self.rate * dt));
         m.normalize().unwrap_or(m)
     }

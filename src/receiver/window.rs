@@ -57,7 +57,7 @@ impl AttitudeReceiver {
             let snapshot_due = due(self.config.snapshot_windows, self.windows);
             let integrity_due = due(self.config.integrity_windows, self.windows);
             if snapshot_due {
-                self.run_snapshot(centre, &windows, &m_centre);
+                self.run_snapshot(k, centre, &windows, &m_centre);
             }
             if integrity_due {
                 self.check_integrity(k, centre, &windows, &m_centre);
@@ -298,27 +298,75 @@ impl AttitudeReceiver {
 
     // (not inlined: each stage's locals get a frame of their own)
     #[inline(never)]
-    fn run_snapshot(&mut self, centre: u64, windows: &[Windowed], m_centre: &Quaternion<f32>) {
+    fn run_snapshot(
+        &mut self,
+        k: u64,
+        centre: u64,
+        windows: &[Windowed],
+        m_centre: &Quaternion<f32>,
+    ) {
         let fixed = self.fixed_windows(windows);
         if fixed.len() < MIN_SNAPSHOT_SATELLITES {
             return;
         }
         let beta = self.beta_cycles();
-        if let Some(s) = snapshot(
+        let Some(s) = snapshot(
             &self.solvers.snapshot,
             &fixed,
             self.config.wavelength_m(),
             &beta,
-        ) {
-            self.snapshot = Some(SnapshotFix {
-                estimate: StageEstimate {
-                    epoch: centre,
-                    q_rb: s.q_rb,
-                    covariance: s.covariance,
-                },
-                m: *m_centre,
-            });
+        ) else {
+            return;
+        };
+        // the snapshot takes the line biases as known: their uncertainty enters its covariance
+        let covariance = s.covariance + self.line_bias_attitude_covariance(&s.c_rb, &fixed);
+        let estimate = StageEstimate {
+            epoch: centre,
+            q_rb: s.q_rb,
+            covariance,
+        };
+        self.snapshot = Some(SnapshotFix {
+            estimate,
+            m: *m_centre,
+        });
+        self.compare_with_snapshot(k, &estimate, m_centre);
+    }
+
+    /// The attitude covariance the line biases' uncertainty gives a snapshot, to first order:
+    /// a common offset `δ` on baseline `i` moves its least-squares baseline by
+    /// `N⁻¹ (Σ w s) λδ`, and the attitude by the rotation that moves `b_i` so.
+    fn line_bias_attitude_covariance(
+        &self,
+        c_rb: &Matrix3<f32>,
+        fixed: &[FixedWindow],
+    ) -> Matrix3<f32> {
+        let lambda = self.config.wavelength_m();
+        let mut info = Matrix3::zeros();
+        let mut sum = Vector3::zeros();
+        for (w, _, _) in fixed {
+            let s = w.sigma_cycles.max(1e-4);
+            let weight = 1.0 / (s * s);
+            info += w.los * w.los.transpose() * weight;
+            sum += w.los * weight;
         }
+        let Some(chol) = info.cholesky() else {
+            return Matrix3::zeros();
+        };
+        let shift = chol.solve(&sum); // δa per cycle of common offset, reference frame
+        let mut cov = Matrix3::zeros();
+        for (b, sigma_rad) in self
+            .geometry
+            .baselines
+            .iter()
+            .zip(self.line_bias.sigma_rad.iter())
+        {
+            let da = c_rb.transpose()
+                * shift
+                * (lambda * sigma_rad * 0.5 * core::f32::consts::FRAC_1_PI);
+            let dtheta = b.cross(&da) / b.norm_squared().max(1e-6);
+            cov += dtheta * dtheta.transpose();
+        }
+        cov
     }
 
     // (not inlined: each stage's locals get a frame of their own)
