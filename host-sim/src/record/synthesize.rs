@@ -22,7 +22,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::format::{interleave, FileFormat};
-use crate::scenarios::signal::triangle;
+use crate::arrays::triangle;
 use crate::synth::file::extension;
 use crate::synth::quantize::encode;
 use crate::synth::scene::SUB_BLOCK;
