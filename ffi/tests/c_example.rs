@@ -20,9 +20,27 @@ fn staticlib() -> PathBuf {
     profile_dir.join("libgnss_attitude_ffi.a")
 }
 
+/// `cargo test` builds the library only as the rlib the test links; the C example needs the
+/// staticlib of the same profile, so build it (the test build has released the target lock).
+fn build_staticlib(root: &Path) {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut build = Command::new(cargo);
+    build
+        .current_dir(root)
+        .args(["build", "-q", "-p", "gnss-attitude-ffi", "--lib"]);
+    if !cfg!(debug_assertions) {
+        build.arg("--release");
+    }
+    let status = build.status().expect("run cargo build for the staticlib");
+    assert!(status.success(), "cargo build of the staticlib failed");
+}
+
 fn build_and_run() -> (std::process::ExitStatus, String) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let lib = staticlib();
+    if !lib.exists() {
+        build_staticlib(&root);
+    }
     assert!(lib.exists(), "static library not built: {}", lib.display());
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-scenario");
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
