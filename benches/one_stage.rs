@@ -7,12 +7,13 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use gnss_attitude::attitude::array::AntennaArray;
 use gnss_attitude::attitude::one_stage::{
-    AdapterConfig, AntennaArray, EpochClock, EstimatedAngles, FilterMode, ObservationAdapter,
-    OneStageConfig, OneStageFilter, PhaseModel, Prior, PromptIq, SatelliteObservation,
-    MAX_SATELLITES,
+    EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior, PromptIq,
+    SatelliteObservation, MAX_SATELLITES,
 };
 use gnss_attitude::geometry::Paper003Angles;
+use gnss_attitude::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use gnss_attitude::signal::{EpochCorrelations, Iq, Prn, Taps};
 use gnss_attitude::tracking::{ChannelState, LockFlags, TrackingEpoch};
 use nalgebra::Vector3;

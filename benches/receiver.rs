@@ -22,7 +22,7 @@ fn locked() -> (ExampleFlight, AttitudeReceiver, u64) {
     flight
         .fly(&mut r, 0, 1000)
         .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(r.attitude().source, AttitudeSource::OneStage);
+    assert_eq!(r.attitude().source, AttitudeSource::Fine);
     (flight, r, 1000)
 }
 

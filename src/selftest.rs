@@ -8,9 +8,9 @@
 
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
 
+use crate::ekf::FilterError;
 use crate::ekf::{Ekf, GateConfidence, NisGate, UpdateReport};
 use crate::noise::{SplitMix64, StandardNormal};
-use crate::FilterError;
 
 /// Seed of the self-test's random stream.
 pub const SELF_TEST_SEED: u64 = 0x5EED_A771_7D0E_0001;
@@ -26,6 +26,7 @@ pub const SELF_TEST_SIGMA_ACC: f32 = 0.2;
 /// The self-test model: a point moving in a plane with constant velocity plus white
 /// acceleration; state `(p_x, p_y, v_x, v_y)` in metres and m/s, position measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ConstantVelocityModel {
     /// Transition matrix for one step.
     pub f: Matrix4<f32>,

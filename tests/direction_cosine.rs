@@ -5,6 +5,7 @@
 
 use gnss_attitude::attitude::array::{AntennaArray, BaselinePair};
 use gnss_attitude::attitude::baseline_epoch::BaselineEpoch;
+use gnss_attitude::attitude::dcm_filter::DcmError;
 use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter};
 use gnss_attitude::attitude::direction_cosine::ColumnChoice;
 use gnss_attitude::attitude::direction_cosine::DirectionCosineModel;
@@ -13,8 +14,8 @@ use gnss_attitude::attitude::multi_structure::STRUCTURE_PAIRS;
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
 use gnss_attitude::ekf::GateConfidence;
 use gnss_attitude::error::Error;
+use gnss_attitude::error::ErrorKind;
 use gnss_attitude::geometry::Quaternion;
-use gnss_attitude::{DcmError, ErrorKind};
 use host_sim::scenarios::dcm::bounds::{self, Noise};
 use host_sim::scenarios::dcm::run_plan;
 use host_sim::scenarios::dcm::truth::{self, Motion};

@@ -1,8 +1,8 @@
 //! The EKF toolkit against an independent f64 Kalman filter, its Monte Carlo consistency, and
 //! its behaviour on bad input.
 
+use gnss_attitude::ekf::FilterError;
 use gnss_attitude::ekf::{Ekf, GateConfidence, NisGate};
-use gnss_attitude::FilterError;
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector2, Vector4};
 use proptest::prelude::*;
 use rand::SeedableRng;

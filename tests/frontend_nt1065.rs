@@ -4,7 +4,7 @@
 use embedded_hal_mock::eh1::delay::NoopDelay;
 use embedded_hal_mock::eh1::spi::{Mock as SpiMock, Transaction as T};
 use gnss_attitude::frontend::nt1065::{reg, ChannelSetup, Nt1065, Nt1065Config};
-use gnss_attitude::FrontEndError;
+use gnss_attitude::frontend::FrontEndError;
 
 /// A register read: `[addr | 0x80, 0]` out, `[_, value]` back.
 fn read(addr: u8, value: u8) -> Vec<T<u8>> {

@@ -5,12 +5,14 @@
 //! window.
 
 use gnss_attitude::error::Error as _;
+use gnss_attitude::error::ErrorKind;
 use gnss_attitude::geometry::{skew, Quaternion};
+use gnss_attitude::gyro::CalibrationError;
 use gnss_attitude::gyro::{
     two_sample_rotation_vector, AttitudePropagator, CalibratorConfig, EpochOutcome,
     LeastSquaresAccumulator, NormalEquations, PaperCalibrator, SqrtInformation,
 };
-use gnss_attitude::{CalibrationError, ErrorKind, Real};
+use gnss_attitude::Real;
 use host_sim::scenarios::{run_by_name, Outcome};
 use host_sim::truth::gyro::{paper_d, section6};
 use nalgebra::{Matrix3, SVector, Vector3};

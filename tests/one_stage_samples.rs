@@ -17,13 +17,15 @@ use gnss_attitude::attitude::ambiguity::{
 };
 use gnss_attitude::attitude::array::{Antenna, AntennaArray};
 use gnss_attitude::attitude::one_stage::{
-    AdapterConfig, AntennaMapping, EpochClock, EstimatedAngles, FilterMode, LockStatus,
-    ObservationAdapter, OneStageConfig, OneStageFilter, PhaseDifferences, PhaseModel, Prior,
-    QuadratureSign, SatelliteObservation,
+    EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, PhaseDifferences,
+    PhaseModel, Prior, SatelliteObservation,
 };
 use gnss_attitude::attitude::range_model::{BaselineCorrelation, Baselines};
 use gnss_attitude::attitude::snapshot::SnapshotSolver;
 use gnss_attitude::geometry::{log_so3, Paper003Angles};
+use gnss_attitude::receiver::{
+    AdapterConfig, AntennaMapping, EpochClock, ObservationAdapter, QuadratureSign,
+};
 use host_sim::chain::{ChainParams, Tracker};
 use host_sim::scenarios::one_stage::loss;
 use host_sim::scenarios::one_stage::samples::{

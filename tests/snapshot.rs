@@ -3,6 +3,7 @@
 //! formula (16) and its reflection, the paper's Monte Carlo via host-sim, and integer
 //! ambiguity resolution on a real GPS sky (success, wrong fixes, refusals).
 
+use gnss_attitude::attitude::ambiguity::AmbiguityError;
 use gnss_attitude::attitude::ambiguity::{
     AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite, SearchMode,
     GPS_L1_WAVELENGTH_M,
@@ -11,9 +12,9 @@ use gnss_attitude::attitude::paper002::paper_formula;
 use gnss_attitude::attitude::range_model::{
     BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges,
 };
+use gnss_attitude::attitude::snapshot::SnapshotError;
 use gnss_attitude::attitude::snapshot::{SnapshotQuality, SnapshotSolver};
 use gnss_attitude::geometry::{rot_x, rot_y, rot_z, rotation_angle, Euler321};
-use gnss_attitude::{AmbiguityError, SnapshotError};
 use host_sim::truth::gps::{Almanac, Geodetic};
 use nalgebra::{Matrix3, Vector3};
 use rand::seq::SliceRandom;
@@ -509,4 +510,107 @@ fn euler_std_follows_the_covariance() {
         (s[0] - 0.187).abs() < 0.01 && (s[1] - 0.187).abs() < 0.01 && (s[2] - 0.242).abs() < 0.01,
         "{s:?}"
     );
+}
+
+#[test]
+fn unknown_line_biases_cancel_in_double_differences_and_come_back_with_the_fix() {
+    // Every epoch a fresh pair of line biases (a front end's power-up), no code information
+    // (σ_code = 1.2 × the longest baseline, zero code): the receiver's cold start.
+    let almanac = Almanac::bundled();
+    let solver = SnapshotSolver::new(
+        Baselines::new(triangle().map(|v| v.cast())).unwrap(),
+        BaselineCorrelation::shared_base_antenna(),
+    );
+    let longest = triangle().iter().map(|b| b.norm()).fold(0.0, f64::max);
+    let config = AmbiguityConfig::gps_l1(0.003, (1.2 * longest) as f32);
+    let resolver = AmbiguityResolver::new(solver, config).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(14);
+    let epochs = 200;
+    let (mut ok, mut wrong, mut refused) = (0, 0, 0);
+    let (mut biases, mut within, mut budget) = (0, 0, 0);
+    let mut nees = Vec::new();
+    for _ in 0..epochs {
+        let mut e = phase_epoch(&mut rng, &almanac, &triangle());
+        let bias: [f64; 2] = std::array::from_fn(|_| rng.random_range(-0.5..0.5));
+        let mut biased = PhaseObservations::<2, 12, f32>::new();
+        for s in e.obs.satellites() {
+            let mut s = *s;
+            s.phase_cycles = std::array::from_fn(|i| s.phase_cycles[i] + bias[i] as f32);
+            s.code_m = [0.0; 2];
+            biased.push(s).unwrap();
+        }
+        e.obs = biased;
+        match resolver.resolve_with_line_biases(&e.obs) {
+            Ok(f) => {
+                let r = e
+                    .obs
+                    .satellites()
+                    .iter()
+                    .position(|s| s.id == f.reference)
+                    .unwrap();
+                let dd_ok = e.truth_z.iter().enumerate().all(|(j, t)| {
+                    (0..2).all(|i| f.fix.ambiguities[i][j] == t[i] - e.truth_z[r][i])
+                });
+                if !dd_ok {
+                    wrong += 1;
+                    continue;
+                }
+                ok += 1;
+                let err = rotation_angle(&(e.c_rb.transpose() * f.fix.solution.c_rb.cast::<f64>()));
+                assert!(
+                    err.to_degrees() < 1.5,
+                    "attitude error {}°",
+                    err.to_degrees()
+                );
+                // NEES of the attitude against its covariance (body-frame rotation vector)
+                let c_est = f.fix.solution.c_rb.cast::<f64>();
+                let d = nalgebra::Rotation3::from_matrix_unchecked(c_est.transpose() * e.c_rb)
+                    .scaled_axis();
+                let p = f.fix.solution.covariance.cast::<f64>();
+                nees.push(d.dot(&(p.try_inverse().unwrap() * d)));
+                for (i, b) in bias.iter().enumerate() {
+                    // the bias absorbs the reference satellite's integer
+                    let expected = b + f64::from(e.truth_z[r][i]);
+                    let got = f64::from(f.line_bias_cycles[i]);
+                    let sigma = f64::from(f.line_bias_sigma_cycles[i]);
+                    assert!((got - expected).abs() < 0.1, "bias {got} vs {expected}");
+                    biases += 1;
+                    within += usize::from((got - expected).abs() <= 3.0 * sigma);
+                }
+            }
+            Err(err) => {
+                assert!(
+                    matches!(
+                        err,
+                        AmbiguityError::Ambiguous
+                            | AmbiguityError::ModelRejected
+                            | AmbiguityError::SearchBudgetExhausted
+                    ),
+                    "{err}"
+                );
+                refused += 1;
+                if err == AmbiguityError::SearchBudgetExhausted {
+                    budget += 1;
+                }
+            }
+        }
+    }
+    // one epoch at 3 mm with the flight's node budget (the receiver tries again every window)
+    let rate = ok as f64 / epochs as f64;
+    eprintln!(
+        "unknown line biases: {ok} fixed, {wrong} wrong, {refused} refused of {epochs} ({budget} on the node budget); \
+         biases within 3σ: {within} of {biases}"
+    );
+    assert!(
+        within as f64 >= 0.98 * biases as f64,
+        "{within} of {biases} within 3σ"
+    );
+    let mean_nees = nees.iter().sum::<f64>() / nees.len() as f64;
+    eprintln!(
+        "attitude NEES: mean {mean_nees:.2} over {} fixes (3 when consistent)",
+        nees.len()
+    );
+    assert!((1.5..6.0).contains(&mean_nees), "attitude NEES {mean_nees}");
+    assert!(rate >= 0.75, "success rate {rate}");
+    assert!(wrong <= 1, "{wrong} wrong fixes in {epochs}");
 }

@@ -41,5 +41,27 @@ fn main() {
         taps.join(", "),
         e.samples
     );
+    // The bit-parallel correlator (2-bit complex planes, 3-level carrier: every stream kind).
+    use gnss_attitude::signal::bitwise::selftest::{pack_self_test, run_bit_correlator_self_test};
+    use gnss_attitude::signal::bitwise::{CarrierLevels, CodeTable, PlaneFormat, Resolution};
+    let format = PlaneFormat { resolution: Resolution::TwoBit, complex: true };
+    let table = CodeTable::new(2.6e6).expect("code table");
+    let p: Vec<_> = (0..3).map(|a| pack_self_test(format, &s[a], &s[a + 3]).expect("pack")).collect();
+    let e = run_bit_correlator_self_test(&table, [p[0].planes(), p[1].planes(), p[2].planes()], CarrierLevels::Three)
+        .expect("host bit-parallel self-test runs")
+        .expect("one code period");
+    let mut taps = Vec::new();
+    for t in e.taps.iter() {
+        let mut row = [t.early.i, t.early.q, t.prompt.i, t.prompt.q, t.late.i, t.late.q, t.noise.i, t.noise.q];
+        if env::var_os("CARGO_FEATURE_WRONG_EXPECTED").is_some() {
+            row[2] += 1;
+        }
+        taps.push(format!("{row:?}"));
+    }
+    let expected = format!(
+        "{expected}/// The bit-parallel self-test's taps per antenna (2-bit complex, 3-level carrier), host.\n\
+         const EXPECTED_BIT_TAPS: [[i32; 8]; 3] = [{}];\n",
+        taps.join(", ")
+    );
     fs::write(out.join("expected.rs"), expected).expect("write expected.rs");
 }

@@ -10,6 +10,7 @@
 //! host-sim synth --out DIR --format FMT --fs HZ --seconds S [--antennas 3] [--leo]
 //!                [--no-noise] [--cn0 C1,C2,...] [--cw HZ,DB] [--dc I,Q] [--constant I,Q]
 //! host-sim acquisition-stats [--searches 200] [--markdown docs/ACQUISITION.md]
+//! host-sim report [--quick] [--out docs/RESULTS.md]
 //! ```
 //! With `--json`, stdout carries exactly one JSON object; progress and logs go to stderr.
 
@@ -54,6 +55,10 @@ enum Command {
         /// Directory for CSV time series and PNG plots (nothing is written without it).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write the receiver's heading as NMEA $GPHDT/$GPTHS sentences to this file
+        /// (scenario microsat).
+        #[arg(long)]
+        nmea: Option<PathBuf>,
     },
     /// Acquisition on the first milliseconds of a recorded sample file.
     Acquire {
@@ -68,35 +73,15 @@ enum Command {
     /// Acquisition, then tracking of a recorded sample file for its length: per satellite C/N0,
     /// lock time and Doppler over time; with three antennas, `--baselines` and `--sky`, the
     /// attitude.
-    Track {
-        #[command(flatten)]
-        file: FileArgs,
-        #[command(flatten)]
-        search: SearchArgs,
-        /// Seconds to track (default: the whole recording).
+    Track(TrackArgs),
+    /// Run the scenarios (seed 1) and write their figures, units and meanings as Markdown.
+    Report {
+        /// Only the runs CI can afford (the runs from synthesized samples are left out).
         #[arg(long)]
-        seconds: Option<f64>,
-        /// Do not re-acquire satellites that lost lock.
-        #[arg(long)]
-        no_reacquire: bool,
-        /// Baselines of antennas 1 and 2 from antenna 0, body frame, m: 'x1,y1,z1;x2,y2,z2'.
-        #[arg(long)]
-        baselines: Option<String>,
-        /// Sky file (lines 'prn,azimuth_deg,elevation_deg'; NED reference frame).
-        #[arg(long)]
-        sky: Option<PathBuf>,
-        /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2'.
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-        line_bias: Option<Vec<f64>>,
-        /// Attitude window, s.
-        #[arg(long, default_value_t = 1.0)]
-        attitude_window: f64,
-        /// Print one JSON object on stdout instead of the table.
-        #[arg(long)]
-        json: bool,
-        /// Directory for CSV rows and PNG plots.
-        #[arg(long)]
-        out: Option<PathBuf>,
+        quick: bool,
+        /// The Markdown file.
+        #[arg(long, default_value = "docs/RESULTS.md")]
+        out: PathBuf,
     },
     /// Measure the acquisition's detection probability and false alarms on every background
     /// (thermal noise, noise-free, strong signals, saturated, zero, DC, CW) and the phantom
@@ -119,62 +104,99 @@ enum Command {
         json: bool,
     },
     /// Synthesize a recording (sample files, truth JSON, sky CSV) in any supported layout.
-    Synth {
-        /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
-        /// Base name of the files.
-        #[arg(long, default_value = "recording")]
-        name: String,
-        /// Layout (see `acquire --help`).
-        #[arg(long)]
-        format: String,
-        /// Sample rate, Hz.
-        #[arg(long)]
-        fs: f64,
-        /// Intermediate frequency, Hz (default 0 for complex layouts, fs/4 for real ones).
-        #[arg(long = "if")]
-        if_hz: Option<f64>,
-        /// Duration, s.
-        #[arg(long)]
-        seconds: f64,
-        /// Antennas: 1, or 3 (paper 003's 1.5 m triangle).
-        #[arg(long, default_value_t = 1)]
-        antennas: usize,
-        /// LEO dynamics (Dopplers within ±40 kHz, rates within ±60 Hz/s) instead of a static
-        /// ground receiver.
-        #[arg(long)]
-        leo: bool,
-        /// Number of satellites (default 8, or as many as `--cn0` values).
-        #[arg(long)]
-        satellites: Option<usize>,
-        /// C/N0 of each satellite, dB-Hz, up to 60 (comma-separated; instead of the
-        /// `--cn0-min`..`--cn0-max` spread).
-        #[arg(long, value_delimiter = ',')]
-        cn0: Option<Vec<f64>>,
-        /// Signals only, no thermal noise (quantized with the same gain).
-        #[arg(long)]
-        no_noise: bool,
-        /// A continuous-wave interferer: 'offset_hz,jn_db' (offset from the band centre, power
-        /// over the noise power).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-        cw: Option<Vec<f64>>,
-        /// A constant offset added: 'i,q' in noise σ (16 LSB in CS8).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-        dc: Option<Vec<f64>>,
-        /// Every sample replaced by 'i,q' in noise σ (e.g. '100,100' saturates: CS8 +127).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-        constant: Option<Vec<f64>>,
-        /// Lowest C/N0, dB-Hz.
-        #[arg(long, default_value_t = 40.0)]
-        cn0_min: f64,
-        /// Highest C/N0, dB-Hz.
-        #[arg(long, default_value_t = 50.0)]
-        cn0_max: f64,
-        /// Seed of the sky, data and noise.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-    },
+    Synth(SynthArgs),
+}
+
+/// `host-sim track`.
+#[derive(Args)]
+struct TrackArgs {
+    #[command(flatten)]
+    file: FileArgs,
+    #[command(flatten)]
+    search: SearchArgs,
+    /// Seconds to track (default: the whole recording).
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Do not re-acquire satellites that lost lock.
+    #[arg(long)]
+    no_reacquire: bool,
+    /// Baselines of antennas 1 and 2 from antenna 0, body frame, m: 'x1,y1,z1;x2,y2,z2'.
+    #[arg(long)]
+    baselines: Option<String>,
+    /// Sky file (lines 'prn,azimuth_deg,elevation_deg'; NED reference frame).
+    #[arg(long)]
+    sky: Option<PathBuf>,
+    /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2'.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    line_bias: Option<Vec<f64>>,
+    /// Attitude window, s.
+    #[arg(long, default_value_t = 1.0)]
+    attitude_window: f64,
+    /// Print one JSON object on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Directory for CSV rows and PNG plots.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// `host-sim synth`.
+#[derive(Args)]
+struct SynthArgs {
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Base name of the files.
+    #[arg(long, default_value = "recording")]
+    name: String,
+    /// Layout (see `acquire --help`).
+    #[arg(long)]
+    format: String,
+    /// Sample rate, Hz.
+    #[arg(long)]
+    fs: f64,
+    /// Intermediate frequency, Hz (default 0 for complex layouts, fs/4 for real ones).
+    #[arg(long = "if")]
+    if_hz: Option<f64>,
+    /// Duration, s.
+    #[arg(long)]
+    seconds: f64,
+    /// Antennas: 1, or 3 (paper 003's 1.5 m triangle).
+    #[arg(long, default_value_t = 1)]
+    antennas: usize,
+    /// LEO dynamics (Dopplers within ±40 kHz, rates within ±60 Hz/s) instead of a static
+    /// ground receiver.
+    #[arg(long)]
+    leo: bool,
+    /// Number of satellites (default 8, or as many as `--cn0` values).
+    #[arg(long)]
+    satellites: Option<usize>,
+    /// C/N0 of each satellite, dB-Hz, up to 60 (comma-separated; instead of the
+    /// `--cn0-min`..`--cn0-max` spread).
+    #[arg(long, value_delimiter = ',')]
+    cn0: Option<Vec<f64>>,
+    /// Signals only, no thermal noise (quantized with the same gain).
+    #[arg(long)]
+    no_noise: bool,
+    /// A continuous-wave interferer: 'offset_hz,jn_db' (offset from the band centre, power
+    /// over the noise power).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    cw: Option<Vec<f64>>,
+    /// A constant offset added: 'i,q' in noise σ (16 LSB in CS8).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    dc: Option<Vec<f64>>,
+    /// Every sample replaced by 'i,q' in noise σ (e.g. '100,100' saturates: CS8 +127).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    constant: Option<Vec<f64>>,
+    /// Lowest C/N0, dB-Hz.
+    #[arg(long, default_value_t = 40.0)]
+    cn0_min: f64,
+    /// Highest C/N0, dB-Hz.
+    #[arg(long, default_value_t = 50.0)]
+    cn0_max: f64,
+    /// Seed of the sky, data and noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 /// A recording on the command line.
@@ -254,6 +276,22 @@ impl SearchArgs {
     }
 }
 
+/// Runs `f` with the NMEA sink of `--nmea` installed (when given), then closes it.
+fn with_nmea(
+    path: Option<&std::path::Path>,
+    f: impl FnOnce() -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    if let Some(p) = path {
+        host_sim::nmea_out::install(p)?;
+    }
+    let result = f();
+    let sentences = host_sim::nmea_out::finish()?;
+    if let Some(p) = path {
+        eprintln!("host-sim: {sentences} NMEA sentences in {}", p.display());
+    }
+    result
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -267,77 +305,14 @@ fn main() -> ExitCode {
             seed,
             json,
             out,
-        }) => run(&scenario, variant.as_deref(), seed, json, out),
+            nmea,
+        }) => with_nmea(nmea.as_deref(), || {
+            run(&scenario, variant.as_deref(), seed, json, out)
+        }),
         Some(Command::Acquire { file, search, json }) => acquire(&file, &search, json),
-        Some(Command::Track {
-            file,
-            search,
-            seconds,
-            no_reacquire,
-            baselines,
-            sky,
-            line_bias,
-            attitude_window,
-            json,
-            out,
-        }) => attitude_setup(
-            baselines.as_deref(),
-            sky.as_deref(),
-            line_bias,
-            attitude_window,
-        )
-        .and_then(|attitude| {
-            let opts = record::TrackOptions {
-                acquire: search.options(),
-                seconds,
-                reacquire: !no_reacquire,
-                attitude,
-                ..record::TrackOptions::default()
-            };
-            track(&file, &opts, json, out.as_deref())
-        }),
-        Some(Command::Synth {
-            out,
-            name,
-            format,
-            fs,
-            if_hz,
-            seconds,
-            antennas,
-            leo,
-            satellites,
-            cn0,
-            no_noise,
-            cw,
-            dc,
-            constant,
-            cn0_min,
-            cn0_max,
-            seed,
-        }) => FileFormat::parse(&format).and_then(|format| {
-            let overlays = overlays(cw, dc, constant)?;
-            let cn0 = cn0.unwrap_or_default();
-            let satellites = satellites.unwrap_or(if cn0.is_empty() { 8 } else { cn0.len() });
-            synth(
-                &out,
-                &name,
-                &record::SynthSpec {
-                    format,
-                    sample_rate_hz: fs,
-                    intermediate_frequency_hz: if_hz,
-                    seconds,
-                    antennas,
-                    dynamics: if leo { Dynamics::Leo } else { Dynamics::Static },
-                    satellites,
-                    cn0_min_dbhz: cn0_min,
-                    cn0_max_dbhz: cn0_max,
-                    seed,
-                    noise: !no_noise,
-                    cn0_dbhz: cn0,
-                    overlays,
-                },
-            )
-        }),
+        Some(Command::Track(args)) => track_command(args),
+        Some(Command::Synth(args)) => synth_command(args),
+        Some(Command::Report { quick, out }) => host_sim::results::write_report(quick, &out),
         Some(Command::AcquisitionStats {
             searches,
             seeds,
@@ -362,6 +337,78 @@ fn main() -> ExitCode {
     }
 }
 
+/// `host-sim track`.
+fn track_command(args: TrackArgs) -> anyhow::Result<()> {
+    let TrackArgs {
+        file,
+        search,
+        seconds,
+        no_reacquire,
+        baselines,
+        sky,
+        line_bias,
+        attitude_window,
+        json,
+        out,
+    } = args;
+    let attitude = attitude_setup(
+        baselines.as_deref(),
+        sky.as_deref(),
+        line_bias,
+        attitude_window,
+    )?;
+    let opts = record::TrackOptions {
+        acquire: search.options(),
+        seconds,
+        reacquire: !no_reacquire,
+        attitude,
+        ..record::TrackOptions::default()
+    };
+    track(&file, &opts, json, out.as_deref())
+}
+
+/// `host-sim synth`.
+fn synth_command(args: SynthArgs) -> anyhow::Result<()> {
+    let SynthArgs {
+        out,
+        name,
+        format,
+        fs,
+        if_hz,
+        seconds,
+        antennas,
+        leo,
+        satellites,
+        cn0,
+        no_noise,
+        cw,
+        dc,
+        constant,
+        cn0_min,
+        cn0_max,
+        seed,
+    } = args;
+    let overlays = overlays(cw, dc, constant)?;
+    let cn0 = cn0.unwrap_or_default();
+    let satellites = satellites.unwrap_or(if cn0.is_empty() { 8 } else { cn0.len() });
+    let spec = record::SynthSpec {
+        format: FileFormat::parse(&format)?,
+        sample_rate_hz: fs,
+        intermediate_frequency_hz: if_hz,
+        seconds,
+        antennas,
+        dynamics: if leo { Dynamics::Leo } else { Dynamics::Static },
+        satellites,
+        cn0_min_dbhz: cn0_min,
+        cn0_max_dbhz: cn0_max,
+        seed,
+        noise: !no_noise,
+        cn0_dbhz: cn0,
+        overlays,
+    };
+    synth(&out, &name, &spec)
+}
+
 fn run(
     name: &str,
     variant: Option<&str>,
@@ -379,7 +426,7 @@ fn run(
         seed,
         out_dir: out,
     };
-    let outcome = (scenario.run)(&ctx)?;
+    let outcome = scenario.run(&ctx)?;
     let document = outcome.to_json(scenario.name, variant, seed);
     if json {
         println!("{}", serde_json::to_string(&document)?);

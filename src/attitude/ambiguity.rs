@@ -48,16 +48,18 @@
 //! candidates (a `heapless::Vec`); on the target it uses a few kilobytes of stack for
 //! `N = 12`.
 
-use nalgebra::{SMatrix, Vector3};
+use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::ekf::{chi_square_quantile, GateConfidence};
-use crate::{real, AmbiguityError, Real, SnapshotError};
+use crate::{real, Real};
 
-use super::integer_search::{Candidate, IntegerSearch, SearchFailure, SearchOutcome};
+use super::integer_search::{IntegerSearch, SearchFailure, SearchOutcome};
 use super::lambda::{decorrelate, Decorrelation};
-use super::range_model::{los_normal_matrix, RangeDifferences, SatelliteRanges};
 pub use super::range_model::{PhaseObservations, PhaseSatellite};
+use super::range_model::{RangeDifferences, SatelliteRanges};
 use super::snapshot::{SnapshotSolution, SnapshotSolver};
+use crate::error::{Error, ErrorKind};
 
 /// GPS L1 carrier wavelength, metres (c / 1575.42 MHz).
 pub const GPS_L1_WAVELENGTH_M: f64 = 0.190_293_672_798_365;
@@ -112,6 +114,7 @@ impl<T: Real> AmbiguityConfig<T> {
 
 /// A validated integer fix and the attitude it gives.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AmbiguityFix<const M: usize, const N: usize, T = f32> {
     /// Integer ambiguities `z_ij` (cycles) per baseline `i` and satellite `j` in input order
     /// (entries past the number of satellites are 0).
@@ -122,21 +125,24 @@ pub struct AmbiguityFix<const M: usize, const N: usize, T = f32> {
     pub cost: T,
     /// Cost of the second-best candidate, or the final search bound when none was inside it.
     pub second_cost: T,
-    /// `second_cost / cost`: the ratio test's statistic.
+    /// `second_cost / cost`.
     pub ratio: T,
-    /// No second candidate was found inside the search bound (the search prunes everything
-    /// beyond `ratio_threshold × best`, and [`AmbiguityConfig::ratio_nodes`] did not find one
-    /// inside the initial bound): `ratio` is then a lower bound of the true ratio (at least
-    /// the threshold), not its value.
+    /// True when the search found no rival inside its bound: `second_cost` is then the
+    /// bound, and `ratio` only a lower bound of the true ratio (the bound is pruned to
+    /// `ratio_threshold` times the best cost, so such a ratio equals the threshold). With
+    /// [`AmbiguityConfig::ratio_nodes`] the second search clears it unless its budget runs out
+    /// or no rival lies inside the χ² bound.
     pub ratio_is_lower_bound: bool,
-    /// Search tree nodes visited.
+    /// Search tree nodes visited (both searches).
     pub nodes: u32,
-    /// Full candidates evaluated (each a Wahba + Gauss–Newton fit when constrained).
+    /// Full candidates evaluated (each a Wahba + Gauss–Newton fit when constrained; both
+    /// searches).
     pub candidates: u32,
 }
 
 /// Integer ambiguity resolution plus snapshot attitude, for `M` baselines.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AmbiguityResolver<const M: usize, T = f32> {
     solver: SnapshotSolver<M, T>,
     config: AmbiguityConfig<T>,
@@ -177,10 +183,8 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         &self.config
     }
 
-    /// Resolves the ambiguities of one epoch and solves the attitude: the float solution, the
-    /// LAMBDA decorrelation, the integer search, the validation, the fix (the steps of the
-    /// module documentation). (The steps are inlined into this function: as calls they cost
-    /// the target's budget a few thousand instructions more.)
+    /// Resolves the ambiguities of one epoch and solves the attitude (line biases removed
+    /// by the caller).
     ///
     /// # Errors
     /// [`AmbiguityError::Input`] for too few satellites or coplanar lines of sight;
@@ -190,138 +194,189 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         &self,
         obs: &PhaseObservations<M, N, T>,
     ) -> Result<AmbiguityFix<M, N, T>, AmbiguityError> {
-        // (n ≤ N holds by construction; the clamp lets the compiler see it, so that indexing
-        // by satellite cannot panic.)
+        let model = FloatModel::single_differences(obs)?;
+        let (fixed, search) = self.fix_integers(&model)?;
+        let n = obs.satellites().len().min(N);
+        let ranges = self.fixed_ranges(
+            obs.satellites().get(..n).unwrap_or(&[]),
+            &fixed,
+            &[T::zero(); M],
+        )?;
+        Ok(search.fix(fixed, self.solver.solve(&ranges)?))
+    }
+
+    /// Resolves the ambiguities of one epoch whose single differences carry an unknown line
+    /// bias per baseline (the phase each slave antenna's RF chain adds), and solves the
+    /// attitude and the biases.
+    ///
+    /// The biases cancel in the double differences against a reference satellite (the one
+    /// with the smallest cofactor): the search runs on those, with their full covariance
+    /// `C_jl = c_j δ_jl + c_r` (the reference's noise is in every one of them). A bias is
+    /// defined only modulo a cycle together with the integers; the convention is that the
+    /// reference satellite's integers are zero, so the fix's integers `z_ij` and biases `b_i`
+    /// give `φ_ij − b_i − z_ij = s_jᵀ a_i / λ`. The biases come from the joint least squares
+    /// of `(a_i, b_i)` on the fixed phases, their σ from its covariance.
+    ///
+    /// # Errors
+    /// As [`Self::resolve`]; at least four satellites are needed (three double differences).
+    pub fn resolve_with_line_biases<const N: usize>(
+        &self,
+        obs: &PhaseObservations<M, N, T>,
+    ) -> Result<BiasedFix<M, N, T>, AmbiguityError> {
         let n = obs.satellites().len().min(N);
         let sats = obs.satellites().get(..n).unwrap_or(&[]);
-        let float = self.float_solution(sats)?;
-        let dec = decorrelate(&float.q1, n)?;
-        let model =
-            ConditionalBaselines::new(&float, &dec, sats, self.config.wavelength_m, self.weights());
-        let sigma_b = self.solver.correlation().matrix();
-        let (l_b, d_b) = ldlt_small(sigma_b).ok_or(SnapshotError::InvalidCorrelation)?;
-        let constrained = self.config.mode == SearchMode::Constrained;
-        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
-        let gate: T = real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(1e9));
-        let search = IntegerSearch {
-            dec: &dec,
-            zhat: model.zhat,
-            l_b,
-            d_b,
-            initial_bound: gate * self.config.ratio_threshold,
-            ratio: self.config.ratio_threshold,
-            max_nodes: self.config.max_nodes,
-        };
-        let outcome = self.search(&search, &model, &float)?;
-        let verdict = self.validate(&outcome, gate)?;
-        let verdict = if verdict.lower_bound && self.config.ratio_nodes > 0 {
-            self.true_ratio(&search, &model, &float, verdict)
-        } else {
-            verdict
-        };
-        let best = outcome.best.first().ok_or(AmbiguityError::NoCandidate)?;
-        let (ambiguities, solution) = self.fix(sats, &float, &dec, best)?;
-        Ok(AmbiguityFix {
-            ambiguities,
-            solution,
-            cost: best.cost,
-            second_cost: verdict.second_cost,
-            ratio: verdict.ratio,
-            ratio_is_lower_bound: verdict.lower_bound,
-            nodes: outcome.nodes + verdict.extra_nodes,
-            candidates: outcome.evaluated + verdict.extra_candidates,
+        let reference = best_satellite(sats).ok_or(SnapshotError::TooFewSatellites)?;
+        let model = FloatModel::<M, N, T>::double_differences(sats, reference)?;
+        let (dd, search) = self.fix_integers(&model)?;
+        // single-difference integers: zero for the reference, the DD integers for the others
+        let mut fixed = [[0i32; N]; M];
+        for (i, row) in fixed.iter_mut().enumerate() {
+            let mut next = 0usize;
+            for (j, z) in row.iter_mut().enumerate().take(n) {
+                if j != reference {
+                    *z = dd[i].get(next).copied().unwrap_or(0);
+                    next += 1;
+                }
+            }
+        }
+        // the biases from the phases alone, the attitude, then the biases again at the
+        // attitude (the baseline lengths and angle now constrain them) and the attitude again
+        let (bias, joint_sigma) = self.line_biases(sats, &fixed)?;
+        let first = self
+            .solver
+            .solve(&self.fixed_ranges(sats, &fixed, &bias)?)?;
+        let (bias, at_sigma) = self.line_biases_at(sats, &fixed, &first);
+        // the attitude's covariance treats the biases as known, which leaves their σ too small
+        // by 1.7 (measured by tests/snapshot.rs); the joint least squares' σ (without the
+        // baselines' constraint) bounds it from above
+        let bias_sigma: [T; M] = core::array::from_fn(|i| {
+            (at_sigma[i] * real(BIAS_SIGMA_FACTOR)).max(joint_sigma[i] * real(0.5))
+        });
+        let mut solution = self
+            .solver
+            .solve(&self.fixed_ranges(sats, &fixed, &bias)?)?;
+        solution.covariance +=
+            self.bias_sensitivity(sats, &fixed, &bias, &bias_sigma, &solution)?;
+        Ok(BiasedFix {
+            fix: search.fix(fixed, solution),
+            line_bias_cycles: bias,
+            line_bias_sigma_cycles: bias_sigma,
+            reference: sats.get(reference).map_or(0, |s| s.id),
         })
     }
 
-    /// Phase and code weights `(κ_φ, κ_p, κ)` (1/m²).
-    #[inline]
-    fn weights(&self) -> (T, T, T) {
-        let cfg = &self.config;
-        let k_phi = T::one() / (cfg.phase_sigma_m * cfg.phase_sigma_m);
-        let k_code = T::one() / (cfg.code_sigma_m * cfg.code_sigma_m);
-        (k_phi, k_code, k_phi + k_code)
-    }
-
-    /// Step 1, the float solution: `â_i = N⁻¹ S W p_i`, `ẑ_ij = φ_ij − s_j·â_i / λ` (shifted by
-    /// `round(ẑ)`), the conditional baselines at the shift, and `Q₁`.
-    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
-    #[inline(always)]
-    fn float_solution<const N: usize>(
+    /// Steps 1–4 of the method on a float model: float solution, decorrelation, search,
+    /// validation. Returns the fixed integers (model order) and the search's figures.
+    fn fix_integers<const N: usize>(
         &self,
-        sats: &[PhaseSatellite<M, T>],
-    ) -> Result<FloatSolution<M, N, T>, AmbiguityError> {
-        let lambda = self.config.wavelength_m;
-        let (k_phi, k_code, kappa) = self.weights();
-        let (info, info_inv) =
-            los_normal_matrix(sats.iter().map(|s| (s.los, T::one() / s.cofactor)))?;
-        let mut f = FloatSolution {
-            shift: [[T::zero(); N]; M],
-            zfloat: [[T::zero(); N]; M],
-            a_shift: [Vector3::<T>::zeros(); M],
-            info,
-            info_inv,
-            q1: SMatrix::<T, N, N>::identity(),
+        model: &FloatModel<M, N, T>,
+    ) -> Result<([[i32; N]; M], SearchFigures<T>), AmbiguityError> {
+        let cfg = &self.config;
+        let float = model.float_solution(cfg);
+        let q1 = model.float_covariance(cfg);
+        let dec = decorrelate(&q1, model.n)?;
+        let zhat = transformed_floats(&dec, &float.zfloat);
+        let t_a = model.baseline_sensitivity(cfg, &dec);
+        let first = SearchLimits {
+            ratio: cfg.ratio_threshold,
+            max_nodes: cfg.max_nodes,
         };
-        for i in 0..M {
-            let mut rhs = Vector3::zeros();
-            for s in sats {
-                rhs += s.los * (s.code_m[i] / s.cofactor);
-            }
-            let a_code = info_inv * rhs;
-            let mut rhs_fixed = Vector3::zeros();
-            for (j, s) in sats.iter().enumerate().take(N) {
-                let zf = s.phase_cycles[i] - s.los.dot(&a_code) / lambda;
-                let sh = zf.round();
-                f.shift[i][j] = sh;
-                f.zfloat[i][j] = zf - sh;
-                // ǎ_i at z = shift: N⁻¹ S W (κ_φ λ(φ − shift) + κ_p p) / κ
-                let r = (k_phi * lambda * (s.phase_cycles[i] - sh) + k_code * s.code_m[i]) / kappa;
-                rhs_fixed += s.los * (r / s.cofactor);
-            }
-            f.a_shift[i] = info_inv * rhs_fixed;
+        let outcome = self.search(model, &float, &dec, zhat, &t_a, first)?;
+        let verdict = self.validate(model, &outcome)?;
+        let fixed = fixed_integers(model.n, &float.shift, &dec, &verdict.z);
+        let mut figures = SearchFigures {
+            cost: verdict.cost,
+            second_cost: verdict.second_cost,
+            ratio: verdict.ratio,
+            ratio_is_lower_bound: verdict.ratio_is_lower_bound,
+            nodes: outcome.nodes,
+            candidates: outcome.evaluated,
+        };
+        if figures.ratio_is_lower_bound && cfg.ratio_nodes > 0 {
+            self.true_ratio(model, &float, &dec, zhat, &t_a, &mut figures);
         }
-        // Q₁ = (σ_φ² W⁻¹ + σ_p² Sᵀ N⁻¹ S) / λ²
-        let (var_phi, var_code) = (T::one() / k_phi, T::one() / k_code);
-        let l2 = lambda * lambda;
-        for (j, sj) in sats.iter().enumerate().take(N) {
-            for (l, sl) in sats.iter().enumerate().take(N) {
-                let mut v = var_code * sj.los.dot(&(info_inv * sl.los));
-                if j == l {
-                    v += var_phi * sj.cofactor;
-                }
-                f.q1[(j, l)] = v / l2;
-            }
-        }
-        Ok(f)
+        Ok((fixed, figures))
     }
 
-    /// Step 3, the integer search with the constraint terms (the baseline-length bound at the
-    /// end of each baseline, the rotation fit of a full candidate), or without them.
-    #[inline(always)]
+    /// The true ratio of a validated fix whose search pruned every rival beyond the ratio
+    /// threshold: the search again with the bound shrinking only to the second-best cost
+    /// (within [`AmbiguityConfig::ratio_nodes`] nodes). Keeps the lower bound when the budget
+    /// runs out or no second candidate lies inside the initial (χ²) bound.
+    fn true_ratio<const N: usize>(
+        &self,
+        model: &FloatModel<M, N, T>,
+        float: &FloatSolution<M, N, T>,
+        dec: &Decorrelation<N, T>,
+        zhat: [[T; N]; M],
+        t_a: &[Vector3<T>; N],
+        figures: &mut SearchFigures<T>,
+    ) {
+        let wide = SearchLimits {
+            ratio: real(UNPRUNED_RATIO),
+            max_nodes: self.config.ratio_nodes,
+        };
+        let Ok(outcome) = self.search(model, float, dec, zhat, t_a, wide) else {
+            return;
+        };
+        figures.nodes = figures.nodes.saturating_add(outcome.nodes);
+        figures.candidates = figures.candidates.saturating_add(outcome.evaluated);
+        let (Some(best), Some(second)) = (outcome.best.first(), outcome.best.get(1)) else {
+            return;
+        };
+        let tiny = T::default_epsilon();
+        figures.second_cost = second.cost;
+        figures.ratio = second.cost / if best.cost > tiny { best.cost } else { tiny };
+        figures.ratio_is_lower_bound = false;
+    }
+
+    /// Step 3: the bounded depth-first integer search, constrained by the baseline lengths
+    /// and angles ([`SearchMode::Constrained`]) or not.
     fn search<const N: usize>(
         &self,
-        search: &IntegerSearch<'_, M, N, T>,
-        model: &ConditionalBaselines<M, N, T>,
+        model: &FloatModel<M, N, T>,
         float: &FloatSolution<M, N, T>,
+        dec: &Decorrelation<N, T>,
+        zhat: [[T; N]; M],
+        t_a: &[Vector3<T>; N],
+        limits: SearchLimits<T>,
     ) -> Result<SearchOutcome<M, N, T>, AmbiguityError> {
-        let constrained = self.config.mode == SearchMode::Constrained;
+        let cfg = &self.config;
+        let n = model.n;
+        let kappa = cfg.kappa();
+        let conditional = |i: usize, z: &[T; N]| -> Vector3<T> {
+            let mut a = float.a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
+            for (t, &zc) in t_a.iter().zip(z.iter()).take(n) {
+                a -= t * zc;
+            }
+            a
+        };
+        // Σ_B = L_B D_B L_Bᵀ (forward LDLᵀ)
         let sigma_b = self.solver.correlation().matrix();
+        let (l_b, d_b) = ldlt_small(sigma_b).ok_or(SnapshotError::InvalidCorrelation)?;
+        let constrained = cfg.mode == SearchMode::Constrained;
+        let search = IntegerSearch {
+            dec,
+            zhat,
+            l_b,
+            d_b,
+            initial_bound: self.gate(n) * cfg.ratio_threshold,
+            ratio: limits.ratio,
+            max_nodes: limits.max_nodes,
+        };
         let lengths = self.solver.baselines().as_array().map(|b| b.norm());
-        let (_, _, kappa) = self.weights();
-        let length_var = float.info_inv.trace() / kappa;
-        let fit_info = float.info * kappa;
+        let length_var = model.info_inv.trace() / kappa;
+        let fit_info = model.info * kappa;
         search
             .run(
                 |i, z| {
-                    if !constrained {
-                        return T::zero();
-                    }
-                    let (Some(&length), Some(&var_i)) =
-                        (lengths.get(i), sigma_b.as_slice().get(i * (M + 1)))
-                    else {
+                    let (Some(&length), Some(&var_i), true) = (
+                        lengths.get(i),
+                        sigma_b.as_slice().get(i * (M + 1)),
+                        constrained,
+                    ) else {
                         return T::zero();
                     };
-                    let d = model.at(i, z).norm() - length;
+                    let d = conditional(i, z).norm() - length;
                     d * d / (var_i * length_var)
                 },
                 |z| {
@@ -330,7 +385,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                     }
                     let mut a = [Vector3::zeros(); M];
                     for (i, (ai, zi)) in a.iter_mut().zip(z.iter()).enumerate() {
-                        *ai = model.at(i, zi);
+                        *ai = conditional(i, zi);
                     }
                     self.solver
                         .fit_reference_baselines(&a, &fit_info)
@@ -344,192 +399,521 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
             })
     }
 
-    /// Step 4, the validation: the χ² test of the best, the ratio test against the second.
-    /// Without a second candidate inside the search bound the ratio is `bound / best`, a lower
-    /// bound of the true one.
-    #[inline(always)]
+    /// The χ² gate (99.9 %) of the best candidate's cost: `M n + 3(M − 1)` degrees of freedom
+    /// constrained, `M n` unconstrained.
+    fn gate(&self, n: usize) -> T {
+        let constrained = self.config.mode == SearchMode::Constrained;
+        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
+        real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(UNBOUNDED_GATE))
+    }
+
+    /// Step 4: the best candidate must pass the χ² gate and beat every rival by the ratio.
     fn validate<const N: usize>(
         &self,
+        model: &FloatModel<M, N, T>,
         outcome: &SearchOutcome<M, N, T>,
-        gate: T,
-    ) -> Result<RatioVerdict<T>, AmbiguityError> {
+    ) -> Result<Verdict<M, N, T>, AmbiguityError> {
         let best = outcome.best.first().ok_or(AmbiguityError::NoCandidate)?;
-        let second = outcome.best.get(1).map(|c| c.cost);
-        let second_cost = second.unwrap_or(outcome.bound);
+        let rival = outcome.best.get(1);
+        // without a rival inside the search bound, the bound (≥ threshold × best) is all the
+        // search proved: the ratio is a lower bound
+        let second_cost = rival.map_or(outcome.bound, |c| c.cost);
         let tiny = T::default_epsilon();
         let ratio = second_cost / if best.cost > tiny { best.cost } else { tiny };
-        if !(best.cost <= gate) {
+        if !(best.cost <= self.gate(model.n)) {
             return Err(AmbiguityError::ModelRejected);
         }
-        // Ambiguous when a second candidate was found below `threshold × best`. (When none was
-        // found, `second_cost` is the search bound, at least `threshold × best` up to rounding.)
-        let rival = second.is_some_and(|c| c < best.cost * self.config.ratio_threshold);
-        if rival || !ratio.is_finite() {
+        let ambiguous = rival.is_some_and(|c| c.cost < best.cost * self.config.ratio_threshold);
+        if ambiguous || !ratio.is_finite() {
             return Err(AmbiguityError::Ambiguous);
         }
-        Ok(RatioVerdict {
+        Ok(Verdict {
+            z: best.z,
+            cost: best.cost,
             second_cost,
             ratio,
-            lower_bound: second.is_none(),
-            extra_nodes: 0,
-            extra_candidates: 0,
+            ratio_is_lower_bound: rival.is_none(),
         })
     }
 
-    /// The true ratio of a validated fix whose search pruned every rival beyond the ratio
-    /// threshold: the search again with the bound shrinking only to the second-best cost
-    /// (within [`AmbiguityConfig::ratio_nodes`] nodes). Keeps the lower bound when the budget
-    /// runs out or no second candidate lies inside the initial bound.
-    fn true_ratio<const N: usize>(
-        &self,
-        search: &IntegerSearch<'_, M, N, T>,
-        model: &ConditionalBaselines<M, N, T>,
-        float: &FloatSolution<M, N, T>,
-        verdict: RatioVerdict<T>,
-    ) -> RatioVerdict<T> {
-        let wide = IntegerSearch {
-            ratio: real(1e30),
-            max_nodes: self.config.ratio_nodes,
-            ..*search
-        };
-        let Ok(outcome) = self.search(&wide, model, float) else {
-            return verdict;
-        };
-        let (Some(best), Some(second)) = (outcome.best.first(), outcome.best.get(1)) else {
-            return RatioVerdict {
-                extra_nodes: outcome.nodes,
-                extra_candidates: outcome.evaluated,
-                ..verdict
-            };
-        };
-        let tiny = T::default_epsilon();
-        RatioVerdict {
-            second_cost: second.cost,
-            ratio: second.cost / if best.cost > tiny { best.cost } else { tiny },
-            lower_bound: false,
-            extra_nodes: outcome.nodes,
-            extra_candidates: outcome.evaluated,
-        }
-    }
-
-    /// Step 5, the fix: `z = shift + Z⁻ᵀ z'`, the range differences of the fixed phases, the
-    /// attitude.
-    #[allow(clippy::needless_range_loop)] // index loops mirror the equations
-    #[inline(always)]
-    fn fix<const N: usize>(
+    /// Step 5: range differences of the fixed phases, biases `bias` (cycles) removed,
+    /// combined with the code.
+    fn fixed_ranges<const N: usize>(
         &self,
         sats: &[PhaseSatellite<M, T>],
-        float: &FloatSolution<M, N, T>,
-        dec: &Decorrelation<N, T>,
-        best: &Candidate<M, N, T>,
-    ) -> Result<([[i32; N]; M], SnapshotSolution<T>), AmbiguityError> {
-        let lambda = self.config.wavelength_m;
-        let (k_phi, k_code, kappa) = self.weights();
-        let n = dec.n.min(N);
-        let mut ambiguities = [[0i32; N]; M];
+        fixed: &[[i32; N]; M],
+        bias: &[T; M],
+    ) -> Result<RangeDifferences<M, N, T>, AmbiguityError> {
+        let cfg = &self.config;
+        let (k_phi, k_code, kappa) = (cfg.k_phi(), cfg.k_code(), cfg.kappa());
         let mut ranges = RangeDifferences::<M, N, T>::new();
-        let sigma_fixed = |c: T| (c / kappa).sqrt();
         for (j, s) in sats.iter().enumerate().take(N) {
             let mut range_diff = [T::zero(); M];
             for i in 0..M {
-                let mut zij = float.shift[i][j];
-                for c in 0..n {
-                    zij += dec.z_inv_t[(j, c)] * best.z[i][c];
-                }
-                ambiguities[i][j] = to_i32(zij);
-                range_diff[i] =
-                    (k_phi * lambda * (s.phase_cycles[i] - zij) + k_code * s.code_m[i]) / kappa;
+                let zij: T = real(f64::from(fixed[i][j]));
+                range_diff[i] = (k_phi * cfg.wavelength_m * (s.phase_cycles[i] - bias[i] - zij)
+                    + k_code * s.code_m[i])
+                    / kappa;
             }
             ranges.push(SatelliteRanges {
                 id: s.id,
                 los: s.los,
                 range_diff,
-                sigma: sigma_fixed(s.cofactor),
+                sigma: (s.cofactor / kappa).sqrt(),
             })?;
         }
-        let solution = self.solver.solve(&ranges)?;
-        Ok((ambiguities, solution))
+        Ok(ranges)
     }
-}
 
-/// The float solution of step 1.
-struct FloatSolution<const M: usize, const N: usize, T> {
-    /// `round(ẑ)` per baseline and satellite, cycles.
-    shift: [[T; N]; M],
-    /// `ẑ − shift`, cycles.
-    zfloat: [[T; N]; M],
-    /// Conditional baselines at `z = shift`, reference frame, m.
-    a_shift: [Vector3<T>; M],
-    /// `N = S W Sᵀ` and its inverse.
-    info: nalgebra::Matrix3<T>,
-    info_inv: nalgebra::Matrix3<T>,
-    /// `Q₁`, cycles².
-    q1: SMatrix<T, N, N>,
-}
-
-/// Step 2's products: the decorrelated floats `ẑ' = Zᵀ ẑ` and the conditional baselines as a
-/// function of the decorrelated integers, `ǎ_i(z') = ǎ_i(shift) − T_a z'_i` with
-/// `T_a = (λ κ_φ / κ) N⁻¹ S W Z⁻ᵀ`.
-struct ConditionalBaselines<const M: usize, const N: usize, T> {
-    zhat: [[T; N]; M],
-    a_shift: [Vector3<T>; M],
-    t_a: [Vector3<T>; N],
-    n: usize,
-}
-
-impl<const M: usize, const N: usize, T: Real> ConditionalBaselines<M, N, T> {
-    #[inline(always)]
-    fn new(
-        float: &FloatSolution<M, N, T>,
-        dec: &Decorrelation<N, T>,
+    /// The line biases (cycles) and their σ from the fixed phases: per baseline the joint
+    /// weighted least squares of `(a_i, b_i)` with rows `[s_jᵀ/λ, 1]`.
+    fn line_biases<const N: usize>(
+        &self,
         sats: &[PhaseSatellite<M, T>],
-        lambda: T,
-        (k_phi, _, kappa): (T, T, T),
-    ) -> Self {
-        let n = dec.n.min(N);
-        let mut zhat = [[T::zero(); N]; M];
-        for (zh, zf) in zhat.iter_mut().zip(float.zfloat.iter()) {
-            for (c, v) in zh.iter_mut().enumerate().take(n) {
-                *v = (0..n)
-                    .map(|j| dec.z[(j, c)] * zf[j])
-                    .fold(T::zero(), |a, b| a + b);
-            }
+        fixed: &[[i32; N]; M],
+    ) -> Result<([T; M], [T; M]), AmbiguityError> {
+        let lambda = self.config.wavelength_m;
+        let var_phi = self.config.phase_sigma_m * self.config.phase_sigma_m / (lambda * lambda);
+        let mut normal = Matrix4::<T>::zeros();
+        for s in sats {
+            let row = Vector4::new(
+                s.los.x / lambda,
+                s.los.y / lambda,
+                s.los.z / lambda,
+                T::one(),
+            );
+            normal += row * row.transpose() / s.cofactor;
         }
-        let mut t_a = [Vector3::<T>::zeros(); N];
-        for (c, col) in t_a.iter_mut().enumerate().take(n) {
-            let mut v = Vector3::zeros();
+        let chol = normal
+            .cholesky()
+            .ok_or(SnapshotError::CoplanarLineOfSight)?;
+        let cov = chol.inverse();
+        let mut bias = [T::zero(); M];
+        let mut sigma = [T::zero(); M];
+        for i in 0..M {
+            let mut rhs = Vector4::zeros();
             for (j, s) in sats.iter().enumerate().take(N) {
-                v += s.los * (dec.z_inv_t[(j, c)] / s.cofactor);
+                let row = Vector4::new(
+                    s.los.x / lambda,
+                    s.los.y / lambda,
+                    s.los.z / lambda,
+                    T::one(),
+                );
+                let zij: T = real(f64::from(fixed[i][j]));
+                rhs += row * ((s.phase_cycles[i] - zij) / s.cofactor);
             }
-            *col = float.info_inv * v * (lambda * k_phi / kappa);
+            let x = chol.solve(&rhs);
+            bias[i] = x[3];
+            sigma[i] = (cov[(3, 3)] * var_phi).sqrt();
         }
-        Self {
-            zhat,
-            a_shift: float.a_shift,
-            t_a,
-            n,
-        }
-    }
-
-    /// `ǎ_i(z')` for baseline `i`'s decorrelated integers.
-    #[inline]
-    fn at(&self, i: usize, z: &[T; N]) -> Vector3<T> {
-        let mut a = self.a_shift.get(i).copied().unwrap_or_else(Vector3::zeros);
-        for (t, &zc) in self.t_a.iter().zip(z.iter()).take(self.n) {
-            a -= t * zc;
-        }
-        a
+        Ok((bias, sigma))
     }
 }
 
-/// The ratio test's figures.
+impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
+    /// The attitude covariance the biases' uncertainty adds (the snapshot's own treats them
+    /// as known): `Σ_i Δθ_i Δθ_iᵀ`, with `Δθ_i` the attitude's change when bias `i` moves by
+    /// its σ (one more solve per baseline).
+    fn bias_sensitivity<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        fixed: &[[i32; N]; M],
+        bias: &[T; M],
+        sigma: &[T; M],
+        solution: &SnapshotSolution<T>,
+    ) -> Result<Matrix3<T>, AmbiguityError> {
+        let mut extra = Matrix3::zeros();
+        for i in 0..M {
+            let mut moved = *bias;
+            moved[i] += sigma[i];
+            let s = self
+                .solver
+                .solve(&self.fixed_ranges(sats, fixed, &moved)?)?;
+            let d = (solution.q_rb.conjugate() * s.q_rb).to_rotation_vector();
+            extra += d * d.transpose();
+        }
+        Ok(extra)
+    }
+
+    /// The line biases (cycles) at a solved attitude: per baseline the weighted mean of
+    /// `φ_ij − z_ij − s_jᵀ C b_i / λ`, and their σ from the phase noise of that mean and the
+    /// attitude's covariance along the mean line of sight.
+    fn line_biases_at<const N: usize>(
+        &self,
+        sats: &[PhaseSatellite<M, T>],
+        fixed: &[[i32; N]; M],
+        solution: &SnapshotSolution<T>,
+    ) -> ([T; M], [T; M]) {
+        let lambda = self.config.wavelength_m;
+        let var_phi = self.config.phase_sigma_m * self.config.phase_sigma_m / (lambda * lambda);
+        let baselines = self.solver.baselines().as_array();
+        let mut bias = [T::zero(); M];
+        let mut sigma = [T::zero(); M];
+        let weight: T = sats
+            .iter()
+            .fold(T::zero(), |w, s| w + T::one() / s.cofactor);
+        let mean_los = sats
+            .iter()
+            .fold(Vector3::zeros(), |m, s| m + s.los / s.cofactor)
+            / weight;
+        for i in 0..M {
+            let a = solution.c_rb * baselines[i];
+            let mut sum = T::zero();
+            for (j, s) in sats.iter().enumerate().take(N) {
+                let zij: T = real(f64::from(fixed[i][j]));
+                sum += (s.phase_cycles[i] - zij - s.los.dot(&a) / lambda) / s.cofactor;
+            }
+            bias[i] = sum / weight;
+            // δ(sᵀ C b) = sᵀ C (δθ × b) = δθ · (b × Cᵀ s)
+            let g = baselines[i].cross(&(solution.c_rb.transpose() * mean_los)) / lambda;
+            let attitude_var = (g.transpose() * solution.covariance * g).x;
+            sigma[i] = (var_phi / weight + attitude_var).sqrt();
+        }
+        (bias, sigma)
+    }
+}
+
+/// A fix whose single differences carried unknown line biases
+/// ([`AmbiguityResolver::resolve_with_line_biases`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BiasedFix<const M: usize, const N: usize, T = f32> {
+    /// The integers (zero for the reference satellite) and the attitude.
+    pub fix: AmbiguityFix<M, N, T>,
+    /// The line bias of each baseline, cycles (`φ − b − z = sᵀa/λ`).
+    pub line_bias_cycles: [T; M],
+    /// Their standard deviations, cycles.
+    pub line_bias_sigma_cycles: [T; M],
+    /// Id of the reference satellite (whose integers are zero).
+    pub reference: u8,
+}
+
+/// Factor on the line biases' σ at the solved attitude (which treats the biases as known).
+const BIAS_SIGMA_FACTOR: f64 = 1.7;
+
+/// The gate used when the χ² table has no entry (never in practice).
+const UNBOUNDED_GATE: f64 = 1e9;
+
+/// The ratio of the second search ([`AmbiguityConfig::ratio_nodes`]): large enough that the
+/// bound shrinks only to the second-best cost.
+const UNPRUNED_RATIO: f64 = 1e30;
+
+/// The pruning ratio and node budget of one search.
 #[derive(Clone, Copy)]
-struct RatioVerdict<T> {
+struct SearchLimits<T> {
+    ratio: T,
+    max_nodes: u32,
+}
+
+/// What the search found, before the attitude is solved.
+struct SearchFigures<T> {
+    cost: T,
     second_cost: T,
     ratio: T,
-    lower_bound: bool,
-    extra_nodes: u32,
-    extra_candidates: u32,
+    ratio_is_lower_bound: bool,
+    nodes: u32,
+    candidates: u32,
+}
+
+impl<T: Real> SearchFigures<T> {
+    fn fix<const M: usize, const N: usize>(
+        &self,
+        ambiguities: [[i32; N]; M],
+        solution: SnapshotSolution<T>,
+    ) -> AmbiguityFix<M, N, T> {
+        AmbiguityFix {
+            ambiguities,
+            solution,
+            cost: self.cost,
+            second_cost: self.second_cost,
+            ratio: self.ratio,
+            ratio_is_lower_bound: self.ratio_is_lower_bound,
+            nodes: self.nodes,
+            candidates: self.candidates,
+        }
+    }
+}
+
+/// The best candidate and what validated it.
+struct Verdict<const M: usize, const N: usize, T> {
+    z: [[T; N]; M],
+    cost: T,
+    second_cost: T,
+    ratio: T,
+    ratio_is_lower_bound: bool,
+}
+
+/// Float solution shifted by the nearest integers: `shift`, the remainder `ẑ − shift`, and
+/// the conditional baselines at `z = shift`.
+struct FloatSolution<const M: usize, const N: usize, T> {
+    shift: [[T; N]; M],
+    zfloat: [[T; N]; M],
+    a_shift: [Vector3<T>; M],
+}
+
+/// The float model of one epoch: per integer `j` its design vector `d_j` (a line of sight for
+/// single differences, `s_j − s_r` for double differences), the cofactor matrix `C` and its
+/// inverse `W`, the phases (cycles) and codes (m) per baseline, and `N = S W Sᵀ`.
+struct FloatModel<const M: usize, const N: usize, T> {
+    n: usize,
+    design: [Vector3<T>; N],
+    cofactor: SMatrix<T, N, N>,
+    weight: SMatrix<T, N, N>,
+    phase: [[T; N]; M],
+    code: [[T; N]; M],
+    info: Matrix3<T>,
+    info_inv: Matrix3<T>,
+}
+
+impl<T: Real> AmbiguityConfig<T> {
+    fn k_phi(&self) -> T {
+        T::one() / (self.phase_sigma_m * self.phase_sigma_m)
+    }
+    fn k_code(&self) -> T {
+        T::one() / (self.code_sigma_m * self.code_sigma_m)
+    }
+    fn kappa(&self) -> T {
+        self.k_phi() + self.k_code()
+    }
+}
+
+/// The satellite with the smallest cofactor (the double differences' reference).
+fn best_satellite<const M: usize, T: Real>(sats: &[PhaseSatellite<M, T>]) -> Option<usize> {
+    let mut best: Option<(usize, T)> = None;
+    for (j, s) in sats.iter().enumerate() {
+        if best.is_none_or(|(_, c)| s.cofactor < c) {
+            best = Some((j, s.cofactor));
+        }
+    }
+    best.map(|(j, _)| j)
+}
+
+// index loops mirror the equations of the method
+#[allow(clippy::needless_range_loop)]
+impl<const M: usize, const N: usize, T: Real> FloatModel<M, N, T> {
+    /// Single differences: `d_j = s_j`, `C = diag(c_j)`.
+    fn single_differences(obs: &PhaseObservations<M, N, T>) -> Result<Self, SnapshotError> {
+        let n = obs.satellites().len().min(N);
+        let sats = obs.satellites().get(..n).unwrap_or(&[]);
+        let mut model = Self::empty(n);
+        for (j, s) in sats.iter().enumerate().take(N) {
+            model.design[j] = s.los;
+            model.cofactor[(j, j)] = s.cofactor;
+            model.weight[(j, j)] = T::one() / s.cofactor;
+            for i in 0..M {
+                model.phase[i][j] = s.phase_cycles[i];
+                model.code[i][j] = s.code_m[i];
+            }
+        }
+        model.normal()
+    }
+
+    /// Double differences against satellite `r`: `d = s_j − s_r`, `C_jl = c_j δ_jl + c_r`.
+    fn double_differences(sats: &[PhaseSatellite<M, T>], r: usize) -> Result<Self, SnapshotError> {
+        let reference = sats.get(r).ok_or(SnapshotError::TooFewSatellites)?;
+        let n = sats.len().saturating_sub(1).min(N);
+        let mut model = Self::empty(n);
+        let others = sats
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != r)
+            .map(|(_, s)| s);
+        for (j, s) in others.enumerate().take(n) {
+            // (j < n ≤ N; the check lets the compiler see it through the filter)
+            if j >= N {
+                break;
+            }
+            model.design[j] = s.los - reference.los;
+            for i in 0..M {
+                model.phase[i][j] = s.phase_cycles[i] - reference.phase_cycles[i];
+                model.code[i][j] = s.code_m[i] - reference.code_m[i];
+            }
+            for l in 0..n {
+                model.cofactor[(j, l)] = reference.cofactor;
+            }
+            model.cofactor[(j, j)] += s.cofactor;
+        }
+        // W = C⁻¹ on the block in use (identity beyond it)
+        let mut c = SMatrix::<T, N, N>::identity();
+        for j in 0..n {
+            for l in 0..n {
+                c[(j, l)] = model.cofactor[(j, l)];
+            }
+        }
+        model.weight = c
+            .cholesky()
+            .map(|f| f.inverse())
+            .ok_or(SnapshotError::InvalidNoise)?;
+        for j in n..N {
+            model.weight[(j, j)] = T::zero();
+        }
+        model.normal()
+    }
+
+    fn empty(n: usize) -> Self {
+        Self {
+            n,
+            design: [Vector3::zeros(); N],
+            cofactor: SMatrix::zeros(),
+            weight: SMatrix::zeros(),
+            phase: [[T::zero(); N]; M],
+            code: [[T::zero(); N]; M],
+            info: Matrix3::zeros(),
+            info_inv: Matrix3::zeros(),
+        }
+    }
+
+    /// The integers in use (`n ≤ N` by construction; the clamp lets the compiler see it).
+    fn dim(&self) -> usize {
+        self.n.min(N)
+    }
+
+    /// `N = S W Sᵀ` and its inverse (the lines of sight must span three dimensions).
+    fn normal(mut self) -> Result<Self, SnapshotError> {
+        if self.n < 3 {
+            return Err(SnapshotError::TooFewSatellites);
+        }
+        let mut info = Matrix3::zeros();
+        for j in 0..self.dim() {
+            for l in 0..self.dim() {
+                info += self.design[j] * self.design[l].transpose() * self.weight[(j, l)];
+            }
+        }
+        let mean = info.trace() / real(3.0);
+        if !(mean > T::zero()) || !mean.is_finite() {
+            return Err(SnapshotError::Numerical);
+        }
+        if !(info.determinant() / (mean * mean * mean) >= real(MIN_LOS_SHAPE)) {
+            return Err(SnapshotError::CoplanarLineOfSight);
+        }
+        self.info_inv = info
+            .cholesky()
+            .map(|c| c.inverse())
+            .ok_or(SnapshotError::CoplanarLineOfSight)?;
+        self.info = info;
+        Ok(self)
+    }
+
+    /// `S W v` for a vector `v` over the integers.
+    fn s_w(&self, v: &[T; N]) -> Vector3<T> {
+        let mut out = Vector3::zeros();
+        for j in 0..self.dim() {
+            let mut wv = T::zero();
+            for l in 0..self.dim() {
+                wv += self.weight[(j, l)] * v[l];
+            }
+            out += self.design[j] * wv;
+        }
+        out
+    }
+
+    /// Step 1: `â_i = N⁻¹ S W p_i`, `ẑ_ij = φ_ij − d_j·â_i/λ` shifted by its nearest integer,
+    /// and `ǎ_i` at `z = shift`: `N⁻¹ S W (κ_φ λ(φ − shift) + κ_p p) / κ`.
+    fn float_solution(&self, cfg: &AmbiguityConfig<T>) -> FloatSolution<M, N, T> {
+        let (lambda, k_phi, k_code, kappa) =
+            (cfg.wavelength_m, cfg.k_phi(), cfg.k_code(), cfg.kappa());
+        let mut out = FloatSolution {
+            shift: [[T::zero(); N]; M],
+            zfloat: [[T::zero(); N]; M],
+            a_shift: [Vector3::zeros(); M],
+        };
+        for i in 0..M {
+            let a_code = self.info_inv * self.s_w(&self.code[i]);
+            let mut r = [T::zero(); N];
+            for j in 0..self.dim() {
+                let zf = self.phase[i][j] - self.design[j].dot(&a_code) / lambda;
+                let sh = zf.round();
+                out.shift[i][j] = sh;
+                out.zfloat[i][j] = zf - sh;
+                r[j] =
+                    (k_phi * lambda * (self.phase[i][j] - sh) + k_code * self.code[i][j]) / kappa;
+            }
+            out.a_shift[i] = self.info_inv * self.s_w(&r);
+        }
+        out
+    }
+
+    /// `Q₁ = (σ_φ² C + σ_p² Sᵀ N⁻¹ S) / λ²` (identity beyond the integers in use).
+    fn float_covariance(&self, cfg: &AmbiguityConfig<T>) -> SMatrix<T, N, N> {
+        let (var_phi, var_code) = (
+            cfg.phase_sigma_m * cfg.phase_sigma_m,
+            cfg.code_sigma_m * cfg.code_sigma_m,
+        );
+        let l2 = cfg.wavelength_m * cfg.wavelength_m;
+        let mut q1 = SMatrix::<T, N, N>::identity();
+        for j in 0..self.dim() {
+            for l in 0..self.dim() {
+                let v = var_code * self.design[j].dot(&(self.info_inv * self.design[l]))
+                    + var_phi * self.cofactor[(j, l)];
+                q1[(j, l)] = v / l2;
+            }
+        }
+        q1
+    }
+
+    /// `T_a = (λ κ_φ / κ) N⁻¹ S W Z⁻ᵀ`: `ǎ_i(z') = ǎ_i(shift) − T_a z'_i`.
+    fn baseline_sensitivity(
+        &self,
+        cfg: &AmbiguityConfig<T>,
+        dec: &Decorrelation<N, T>,
+    ) -> [Vector3<T>; N] {
+        let scale = cfg.wavelength_m * cfg.k_phi() / cfg.kappa();
+        let mut t_a = [Vector3::zeros(); N];
+        for (c, col) in t_a.iter_mut().enumerate().take(self.dim()) {
+            let mut column = [T::zero(); N];
+            for (j, v) in column.iter_mut().enumerate().take(self.dim()) {
+                *v = dec.z_inv_t[(j, c)];
+            }
+            *col = self.info_inv * self.s_w(&column) * scale;
+        }
+        t_a
+    }
+}
+
+/// Smallest `det N / (tr N / 3)³` of the normal matrix: below, the design vectors span less
+/// than three dimensions.
+const MIN_LOS_SHAPE: f64 = 1e-5;
+
+/// Step 2's transform of the floats: `ẑ' = Zᵀ ẑ` per baseline.
+#[allow(clippy::needless_range_loop)] // index loops mirror the equations
+fn transformed_floats<const M: usize, const N: usize, T: Real>(
+    dec: &Decorrelation<N, T>,
+    zfloat: &[[T; N]; M],
+) -> [[T; N]; M] {
+    let n = dec.n.min(N);
+    let mut zhat = [[T::zero(); N]; M];
+    for i in 0..M {
+        for c in 0..n {
+            let mut v = T::zero();
+            for j in 0..n {
+                v += dec.z[(j, c)] * zfloat[i][j];
+            }
+            zhat[i][c] = v;
+        }
+    }
+    zhat
+}
+
+/// The fixed integers `z = shift + Z⁻ᵀ z'`.
+#[allow(clippy::needless_range_loop)] // index loops mirror the equations
+fn fixed_integers<const M: usize, const N: usize, T: Real>(
+    n: usize,
+    shift: &[[T; N]; M],
+    dec: &Decorrelation<N, T>,
+    best: &[[T; N]; M],
+) -> [[i32; N]; M] {
+    let n = n.min(N);
+    let mut out = [[0i32; N]; M];
+    for i in 0..M {
+        for j in 0..n {
+            let mut zij = shift[i][j];
+            for c in 0..n {
+                zij += dec.z_inv_t[(j, c)] * best[i][c];
+            }
+            out[i][j] = to_i32(zij);
+        }
+    }
+    out
 }
 
 /// Forward `LDLᵀ` of a small SPD matrix: `A = L D Lᵀ`, `L` unit lower triangular.
@@ -564,6 +948,42 @@ fn to_i32<T: Real>(x: T) -> i32 {
         .unwrap_or(0)
 }
 
+/// Errors (refusals) of the integer ambiguity resolution ([`crate::attitude::ambiguity`]).
+///
+/// Every variant except [`AmbiguityError::Input`] is a *refusal*: the data were valid, but no
+/// integer solution could be validated, and the resolver returns no attitude rather than a
+/// possibly wrong one. Retry with the next epoch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AmbiguityError {
+    /// The observations or the configuration were invalid (see the inner error).
+    #[error("ambiguity input refused")]
+    Input(#[from] SnapshotError),
+    /// The integer search visited its node budget before it could prove its answer.
+    #[error("integer search budget exhausted")]
+    SearchBudgetExhausted,
+    /// No integer candidate lies inside the search bound: the data are inconsistent with the
+    /// model (a cycle slip, a wrong baseline, a multipath outlier).
+    #[error("no integer candidate inside the search bound")]
+    NoCandidate,
+    /// The ratio test failed: the second-best candidate fits almost as well as the best.
+    #[error("ratio test failed: ambiguities not validated")]
+    Ambiguous,
+    /// The best candidate fails the χ² test of the whole model (99.9 %).
+    #[error("best integer candidate fails the model test")]
+    ModelRejected,
+}
+
+impl Error for AmbiguityError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::Input(e) => e.kind(),
+            Self::SearchBudgetExhausted => ErrorKind::NotConverged,
+            Self::NoCandidate | Self::Ambiguous | Self::ModelRejected => ErrorKind::Unobservable,
+        }
+    }
+}
 #[cfg(test)]
 mod tests {
     extern crate std;

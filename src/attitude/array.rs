@@ -15,7 +15,8 @@
 
 use nalgebra::Vector3;
 
-use crate::{real, ArrayError, Real};
+use crate::error::{Error, ErrorKind};
+use crate::{real, Real};
 
 /// Shortest distance between two antennas the array accepts, metres (also the shortest
 /// measured baseline the paper-000 filters accept).
@@ -95,6 +96,7 @@ impl BaselinePair {
 /// does not depend on the choice of origin (the common carrier phase is averaged out), only
 /// the filter's internal phases do.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AntennaArray<T = f32> {
     positions: [Vector3<T>; 3],
 }
@@ -193,6 +195,35 @@ impl<T: Real> AntennaArray<T> {
             Ok(())
         } else {
             Err(ArrayError::CollinearAntennas)
+        }
+    }
+}
+
+/// Errors of the antenna array ([`crate::attitude::array::AntennaArray`]), shared by the
+/// paper-000 filters and the one-stage filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ArrayError {
+    /// An antenna coordinate or the side of the triangle was NaN or infinite.
+    #[error("non-finite antenna position")]
+    NonFinite,
+    /// Two antennas are closer than
+    /// [`MIN_BASELINE_LENGTH`] (or a triangle
+    /// side is shorter than that, or negative).
+    #[error("two antennas (nearly) coincide")]
+    CoincidentAntennas,
+    /// The three antennas are (nearly) collinear: they span no plane, so the rotation about
+    /// their line is unobservable (checked by the estimators that need a plane).
+    #[error("the three antennas are (nearly) collinear")]
+    CollinearAntennas,
+}
+
+impl Error for ArrayError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::CoincidentAntennas | Self::CollinearAntennas => ErrorKind::InvalidInput,
         }
     }
 }

@@ -1,15 +1,14 @@
 //! The inputs of the baseline filters: one epoch of baseline vectors and velocity differences
 //! in the reference frame (paper 000, eqs. (1), (6)–(9)). The antenna array in body axes is the
-//! crate's shared [`AntennaArray`] (re-exported here with [`BaselinePair`] and
-//! [`MIN_BASELINE_LENGTH`]); its errors convert into [`DcmError`] (`From<ArrayError>`:
+//! crate's shared [`AntennaArray`](super::array::AntennaArray); its errors convert into [`DcmError`] (`From<ArrayError>`:
 //! coincident antennas → [`DcmError::ZeroLengthBaseline`]).
 
 use nalgebra::Vector3;
 
-use crate::error::DcmError;
+use crate::attitude::dcm_filter::DcmError;
 use crate::{real, Real};
 
-pub use super::array::{AntennaArray, BaselinePair, MIN_BASELINE_LENGTH};
+use super::array::{BaselinePair, MIN_BASELINE_LENGTH};
 
 /// One epoch of measurements, in the reference frame (ECEF for paper 000), indexed by
 /// [`BaselinePair::index`]; `None` marks a pair whose antennas have no solution.
@@ -19,6 +18,7 @@ pub use super::array::{AntennaArray, BaselinePair, MIN_BASELINE_LENGTH};
 /// divided by `Δt`: the central difference for the middle of the step); the baselines are
 /// measured **at `t_k`**.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BaselineEpoch<T = f32> {
     /// Measured baselines `r_i − r_j` at the end of the step, reference frame, metres
     /// (`ξ_ij, η_ij, ζ_ij` of eq. (8)).
@@ -91,6 +91,7 @@ impl<T: Real> BaselineEpoch<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::attitude::array::AntennaArray;
 
     #[test]
     fn coincident_antennas_and_missing_antennas_are_typed_errors() {

@@ -26,7 +26,7 @@
 use nalgebra::{Cholesky, Matrix3, SMatrix, SVector};
 
 use crate::ekf::{chi_square_quantile, GateConfidence};
-use crate::error::DcmError;
+
 use crate::geometry::nearest_rotation;
 use crate::{real, Real};
 
@@ -34,6 +34,10 @@ use super::array::{AntennaArray, BaselinePair};
 use super::baseline_epoch::BaselineEpoch;
 use super::direction_cosine::{givens_inverse, ColumnChoice, DirectionCosineModel};
 use super::filter_estimate::{FilterEstimate, FilterHealth};
+use crate::attitude::array::ArrayError;
+use crate::ekf::FilterError;
+use crate::error::{Error, ErrorKind};
+use crate::geometry::GeometryError;
 
 /// Below this QR pivot ratio of `Φ(Ŷ)` the estimate is flagged [`FilterHealth::WeakGeometry`]
 /// (errors amplified by more than about a thousand along one direction). The paper's geometry
@@ -83,6 +87,7 @@ impl<T: Real> DcmFilterConfig<T> {
 
 /// The six-state direction-cosine EKF (paper 000, eq. (10), corrected model).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DirectionCosineFilter<T: Real = f32> {
     model: DirectionCosineModel<T>,
     config: DcmFilterConfig<T>,
@@ -334,4 +339,89 @@ impl<T: Real> DirectionCosineFilter<T> {
 pub(crate) fn symmetrize<T: Real, const N: usize>(p: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
     let half: T = real(0.5);
     (p + p.transpose()) * half
+}
+
+/// Errors of the baseline and Doppler attitude filters of paper 000 ([`crate::attitude`]:
+/// the direction-cosine filter, the multi-structure filter and the rigid-body filter).
+///
+/// A step that returns one of these leaves its filter exactly as it was before the call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum DcmError {
+    /// A measurement, an antenna position, an initial attitude or a covariance was NaN or
+    /// infinite.
+    #[error("non-finite baseline filter input")]
+    NonFinite,
+    /// A baseline vector or a velocity difference that the filter needs is absent (one of its
+    /// two antennas has no solution in this epoch).
+    #[error("a needed baseline or velocity difference is missing")]
+    MissingBaseline,
+    /// A baseline — an antenna-position difference in body axes, or a measured baseline in the
+    /// reference frame — is shorter than [`crate::attitude::array::MIN_BASELINE_LENGTH`].
+    #[error("baseline of (near) zero length")]
+    ZeroLengthBaseline,
+    /// A configuration value is out of its domain: a non-positive step or noise level, a pair
+    /// of identical baselines, a covariance that is not symmetric positive definite.
+    #[error("invalid baseline filter configuration")]
+    InvalidConfig,
+    /// The antenna geometry makes the model singular at every attitude: the two baselines are
+    /// (nearly) parallel, or the eliminated column's body axis lies (nearly) in the antenna
+    /// plane (`n_k → 0` with `n = b₁ × b₂`, the paper's `n_x = 0` case).
+    #[error("antenna geometry makes the direction-cosine model singular")]
+    SingularGeometry,
+    /// `Φ(Ŷ)` is singular in working precision at the current estimate. Since
+    /// `|det Φ(Y)| ≥ |n_k|³` for every state, this happens only for geometry close to the
+    /// limit of [`DcmError::SingularGeometry`], or after an overflow. Re-initialize the filter.
+    #[error("observation Jacobian is numerically singular")]
+    SingularJacobian,
+    /// The covariance lost positive definiteness during the step (the step is rejected).
+    #[error("covariance lost positive definiteness")]
+    NotPositiveDefinite,
+    /// The estimate could not be turned into a rotation (its direction cosines are too far
+    /// from orthonormal, or the orthonormalization did not converge).
+    #[error("estimate is too far from a rotation")]
+    NotARotation,
+    /// The shared Kalman filter toolkit rejected the step.
+    #[error("filter toolkit refused the step")]
+    Filter(#[from] FilterError),
+    /// The step overflowed or produced a non-finite number from finite input.
+    #[error("baseline filter step overflowed")]
+    Numerical,
+}
+
+impl Error for DcmError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::MissingBaseline | Self::ZeroLengthBaseline | Self::InvalidConfig => {
+                ErrorKind::InvalidInput
+            }
+            Self::SingularGeometry | Self::SingularJacobian => ErrorKind::Unobservable,
+            Self::NotPositiveDefinite => ErrorKind::NotPositiveDefinite,
+            Self::NotARotation | Self::Numerical => ErrorKind::Numerical,
+            Self::Filter(e) => e.kind(),
+        }
+    }
+}
+
+impl From<GeometryError> for DcmError {
+    fn from(e: GeometryError) -> Self {
+        match e {
+            GeometryError::NonFinite => Self::NonFinite,
+            GeometryError::ZeroLength
+            | GeometryError::NotARotation
+            | GeometryError::NotConverged => Self::NotARotation,
+        }
+    }
+}
+
+impl From<ArrayError> for DcmError {
+    fn from(e: ArrayError) -> Self {
+        match e {
+            ArrayError::NonFinite => Self::NonFinite,
+            ArrayError::CoincidentAntennas => Self::ZeroLengthBaseline,
+            ArrayError::CollinearAntennas => Self::SingularGeometry,
+        }
+    }
 }

@@ -22,11 +22,11 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-use crate::error::DcmError;
+use crate::attitude::dcm_filter::DcmError;
 use crate::geometry::{skew, vee};
 use crate::{real, Real};
 
-pub(crate) use super::givens::givens_inverse;
+pub(crate) use crate::linalg::givens_inverse;
 
 /// Which column of `M` the state leaves out (and recovers as the cross product of the other
 /// two).
@@ -50,6 +50,7 @@ pub const MIN_NORMAL_RATIO: f64 = 5e-3;
 
 /// The six-state model for one pair of baselines.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DirectionCosineModel<T = f32> {
     /// Eliminated column `k` (0-based body axis).
     eliminated: usize,
@@ -61,12 +62,12 @@ pub struct DirectionCosineModel<T = f32> {
 
 /// Relabels body-axis components cyclically so that axis `k` comes first.
 fn to_model_axes<T: Real>(v: &Vector3<T>, k: usize) -> Vector3<T> {
-    Vector3::from_fn(|j, _| v.get((k + j) % 3).copied().unwrap_or_else(T::zero))
+    Vector3::from_fn(|j, _| v[(k + j) % 3])
 }
 
 /// Inverse of [`to_model_axes`].
 fn from_model_axes<T: Real>(v: &Vector3<T>, k: usize) -> Vector3<T> {
-    Vector3::from_fn(|i, _| v.get((i + 3 - k) % 3).copied().unwrap_or_else(T::zero))
+    Vector3::from_fn(|i, _| v[(i + 3 - k % 3) % 3])
 }
 
 /// Index in `Y` of row `i` of column `c₂` (`second = false`) or `c₃` (`second = true`).
@@ -79,13 +80,13 @@ impl<T: Real> DirectionCosineModel<T> {
     ///
     /// # Errors
     /// [`DcmError::NonFinite`]; [`DcmError::ZeroLengthBaseline`] for a baseline shorter than
-    /// [`super::baseline_epoch::MIN_BASELINE_LENGTH`]; [`DcmError::SingularGeometry`] when
+    /// [`super::array::MIN_BASELINE_LENGTH`]; [`DcmError::SingularGeometry`] when
     /// `|n_k| / (|b₁||b₂|) <` [`MIN_NORMAL_RATIO`] for the chosen column.
     pub fn new(b1: &Vector3<T>, b2: &Vector3<T>, choice: ColumnChoice) -> Result<Self, DcmError> {
         if !b1.iter().chain(b2.iter()).all(|v| v.is_finite()) {
             return Err(DcmError::NonFinite);
         }
-        let min_len: T = real(super::baseline_epoch::MIN_BASELINE_LENGTH);
+        let min_len: T = real(super::array::MIN_BASELINE_LENGTH);
         if !(b1.norm() >= min_len) || !(b2.norm() >= min_len) {
             return Err(DcmError::ZeroLengthBaseline);
         }

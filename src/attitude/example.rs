@@ -9,14 +9,14 @@
 //! assert_eq!(fix.ambiguities[0][0], example::ambiguity(0, 0));
 //! let truth = example::attitude().to_quaternion();
 //! assert!(fix.solution.q_rb.angle_to(&truth) < 0.02);
-//! # Ok::<(), gnss_attitude::AmbiguityError>(())
+//! # Ok::<(), gnss_attitude::attitude::ambiguity::AmbiguityError>(())
 //! ```
 
 use nalgebra::Vector3;
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::Euler321;
 use crate::noise::{SplitMix64, StandardNormal};
-use crate::SnapshotError;
 
 use super::ambiguity::{
     AmbiguityConfig, AmbiguityResolver, PhaseObservations, PhaseSatellite, GPS_L1_WAVELENGTH_M,

@@ -2,7 +2,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::error::DcmError;
+use crate::attitude::dcm_filter::DcmError;
 use crate::geometry::{Euler321, Quaternion};
 use crate::Real;
 
@@ -31,6 +31,7 @@ pub enum FilterHealth {
 
 /// An attitude estimate with its uncertainty, as every baseline filter reports it per epoch.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FilterEstimate<T = f32> {
     /// Attitude `C_rb`, body to reference frame (ECEF), a proper rotation (the six-state
     /// filter's direction cosines are orthonormalized by [`crate::geometry::nearest_rotation`]).

@@ -18,7 +18,8 @@
 use heapless::Vec;
 use nalgebra::SMatrix;
 
-use crate::{Real, SnapshotError};
+use crate::attitude::snapshot::SnapshotError;
+use crate::Real;
 
 use super::lambda::Decorrelation;
 

@@ -14,13 +14,15 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::{real, Real, SnapshotError};
+use crate::attitude::snapshot::SnapshotError;
+use crate::{real, Real};
 
 /// Upper bound on the reduction loop's iterations (Gauss sweeps and swaps).
 pub const LAMBDA_MAX_ITERATIONS: usize = 512;
 
 /// The decorrelated factorization `Zᵀ Q Z = Lᵀ D L`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Decorrelation<const N: usize, T = f32> {
     /// Dimension in use (`≤ N`).
     pub n: usize,

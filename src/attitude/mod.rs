@@ -12,7 +12,6 @@
 //! **Snapshot (paper 002)**, one epoch of carrier phase:
 //! * [`range_model`]: paper 002's model `R = Bᵀ A S` (range differences between antennas), the
 //!   validated input types and the body baselines.
-//! * [`eigen`]: a bounded cyclic Jacobi eigen-decomposition of small symmetric matrices.
 //! * [`wahba`]: Wahba's problem by Davenport's q-method (never a reflection).
 //! * [`paper002`]: the paper's own formula (16), `A = Qᵀ(QQᵀ)^{-1/2}`, kept as the reference
 //!   for four non-coplanar antennas, with its reflection reported as an error.
@@ -43,10 +42,9 @@ pub mod array;
 pub mod baseline_epoch;
 pub mod dcm_filter;
 pub mod direction_cosine;
-pub mod eigen;
 pub mod example;
 pub mod filter_estimate;
-mod givens;
+pub mod gyro_aided;
 mod integer_search;
 pub mod lambda;
 pub mod multi_structure;

@@ -30,8 +30,8 @@
 
 use nalgebra::{Cholesky, Matrix3, SMatrix, Vector3};
 
+use crate::attitude::dcm_filter::DcmError;
 use crate::ekf::{chi_square_quantile, GateConfidence};
-use crate::error::DcmError;
 use crate::geometry::{log_so3, Quaternion};
 use crate::{real, Real};
 
@@ -50,6 +50,7 @@ pub const STRUCTURE_PAIRS: [[BaselinePair; 2]; 3] = [
 
 /// The combined estimate and what each structure reported.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct MultiStructureEstimate<T = f32> {
     /// The robust combination (its `nis` is the mean NIS of the structures that entered it,
     /// 6 degrees of freedom).
@@ -63,6 +64,7 @@ pub struct MultiStructureEstimate<T = f32> {
 
 /// Three six-state filters and their combination.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct MultiStructureFilter<T: Real = f32> {
     filters: [DirectionCosineFilter<T>; 3],
     /// Trace of each structure's steady-state attitude covariance for unit `σ_z²` (rad²/m²):

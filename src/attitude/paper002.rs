@@ -12,11 +12,12 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::is_rotation;
-use crate::{real, Real, SnapshotError};
+use crate::{real, Real};
 
-use super::eigen::symmetric_eigen;
 use super::range_model::{Baselines, RangeDifferences};
+use crate::linalg::symmetric_eigen;
 
 /// Eq. (16) on one epoch: returns `C_rb = Aᵀ` (the paper's `A = C_br` transposed into the
 /// crate's convention). The per-satellite `sigma` are ignored, as in the paper.

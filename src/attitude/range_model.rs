@@ -16,7 +16,8 @@
 use heapless::Vec;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::{real, Real, SnapshotError};
+use crate::attitude::snapshot::SnapshotError;
+use crate::{real, Real};
 
 /// The largest number of satellites the crate's examples and budgets use (the paper's "up to
 /// 12"); the observation types take their capacity as a const generic `N`.
@@ -24,6 +25,7 @@ pub const MAX_SATELLITES: usize = 12;
 
 /// The range differences of one satellite on every baseline.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SatelliteRanges<const M: usize, T = f32> {
     /// Satellite id (PRN); ids must be unique within an epoch.
     pub id: u8,
@@ -38,6 +40,7 @@ pub struct SatelliteRanges<const M: usize, T = f32> {
 
 /// One epoch of range differences for up to `N` satellites, validated on insertion.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RangeDifferences<const M: usize, const N: usize, T = f32> {
     sats: Vec<SatelliteRanges<M, T>, N>,
 }
@@ -89,6 +92,7 @@ impl<const M: usize, const N: usize, T: Real> RangeDifferences<M, N, T> {
 
 /// Raw single differences of one satellite on every baseline.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PhaseSatellite<const M: usize, T = f32> {
     /// Satellite id (PRN); unique within an epoch.
     pub id: u8,
@@ -106,6 +110,7 @@ pub struct PhaseSatellite<const M: usize, T = f32> {
 
 /// One epoch of raw single differences for up to `N` satellites, validated on insertion.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PhaseObservations<const M: usize, const N: usize, T = f32> {
     sats: Vec<PhaseSatellite<M, T>, N>,
 }
@@ -161,6 +166,7 @@ fn push_unique<S, const N: usize>(
     if sats.iter().any(|s| id(s) == id(&sat)) {
         return Err(SnapshotError::DuplicateSatellite);
     }
+    // (the refused satellite is dropped: the caller learns the set is full)
     sats.push(sat).map_err(|_| SnapshotError::TooManySatellites)
 }
 
@@ -211,6 +217,7 @@ pub(crate) fn los_normal_matrix<T: Real>(
 
 /// The body baselines `b_1..b_m` of an antenna array, validated.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Baselines<const M: usize, T = f32> {
     b: [Vector3<T>; M],
 }
@@ -268,6 +275,7 @@ impl<const M: usize, T: Real> Baselines<M, T> {
 
 /// A baseline correlation matrix `Σ_B` (symmetric positive definite) and its inverse.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BaselineCorrelation<const M: usize, T = f32> {
     sigma: SMatrix<T, M, M>,
     inverse: SMatrix<T, M, M>,

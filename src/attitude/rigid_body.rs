@@ -28,8 +28,8 @@
 
 use nalgebra::{Cholesky, Matrix3, Vector3};
 
+use crate::attitude::dcm_filter::DcmError;
 use crate::ekf::{Ekf, GateConfidence, NisGate};
-use crate::error::DcmError;
 use crate::geometry::{skew, Quaternion};
 use crate::{real, Real};
 
@@ -62,6 +62,7 @@ pub struct RigidBodyConfig<T = f32> {
 
 /// The rigid-body error-state filter.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RigidBodyFilter<T: Real = f32> {
     /// Body-axes baselines `b₁₂, b₂₃, b₁₃`, metres.
     baselines: [Vector3<T>; 3],
@@ -107,7 +108,7 @@ impl<T: Real> RigidBodyFilter<T> {
         }
         let q_rb = q_rb0.normalize()?;
         let ekf = Ekf::new(Vector3::zeros(), *p0).map_err(|e| match e {
-            crate::FilterError::InvalidCovariance => DcmError::InvalidConfig,
+            crate::ekf::FilterError::InvalidCovariance => DcmError::InvalidConfig,
             other => DcmError::Filter(other),
         })?;
         Ok(Self {

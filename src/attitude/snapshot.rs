@@ -28,10 +28,12 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::ekf::{chi_square_quantile, GateConfidence};
 use crate::geometry::{skew, Euler321, Quaternion};
-use crate::{real, Real, SnapshotError};
+use crate::{real, Real};
 
 use super::range_model::{los_normal_matrix, BaselineCorrelation, Baselines, RangeDifferences};
 use super::wahba::{WahbaPair, WahbaProblem};
+use crate::error::{Error, ErrorKind};
+use crate::geometry::GeometryError;
 
 /// Upper bound on the Gauss–Newton iterations of [`SnapshotSolver`].
 pub const GAUSS_NEWTON_MAX_ITERATIONS: usize = 8;
@@ -51,6 +53,7 @@ pub enum SnapshotQuality {
 
 /// The result of one snapshot solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SnapshotSolution<T = f32> {
     /// Attitude `C_rb`, body to reference (paper 002's `A` is its transpose).
     pub c_rb: Matrix3<T>,
@@ -114,6 +117,7 @@ pub(crate) struct BaselineFit<T> {
 
 /// Single-epoch maximum-likelihood attitude from range differences on `M ≥ 2` baselines.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SnapshotSolver<const M: usize, T = f32> {
     baselines: Baselines<M, T>,
     correlation: BaselineCorrelation<M, T>,
@@ -222,7 +226,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         } else {
             SnapshotQuality::Good
         };
-        let euler = Euler321::from_dcm(&c_rb).map_err(|_| SnapshotError::Numerical)?;
+        let euler = Euler321::from_dcm(&c_rb)?;
         if !(covariance.iter().all(|v| v.is_finite()) && residual_rms.is_finite()) {
             return Err(SnapshotError::Numerical);
         }
@@ -277,9 +281,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
                 return Err(SnapshotError::Numerical);
             }
             // C ← C exp([δ]×)
-            q = (q * Quaternion::from_rotation_vector(&delta))
-                .normalize()
-                .map_err(|_| SnapshotError::Numerical)?;
+            q = (q * Quaternion::from_rotation_vector(&delta)).normalize()?;
             iterations += 1;
             if delta.norm() <= tolerance {
                 converged = true;
@@ -351,9 +353,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             // H is in relative weights: the attitude variance is tr(H⁻¹) σ_min².
             let small = delta.norm() <= tolerance
                 || delta.norm_squared() <= chol.inverse().trace() * scale * real(1e-6);
-            q = (q * Quaternion::from_rotation_vector(&delta))
-                .normalize()
-                .map_err(|_| SnapshotError::Numerical)?;
+            q = (q * Quaternion::from_rotation_vector(&delta)).normalize()?;
             iterations += 1;
             if small {
                 // the step was below rounding or far below the attitude uncertainty
@@ -396,5 +396,90 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             }
         }
         (h, g, cost)
+    }
+}
+
+/// Errors of the snapshot attitude solvers ([`crate::attitude`]): input validation, the
+/// paper's formula and the bounded numerical routines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SnapshotError {
+    /// A baseline, line of sight, range difference, phase, code or noise value was NaN or
+    /// infinite.
+    #[error("non-finite snapshot input")]
+    NonFinite,
+    /// Fewer than 3 satellites: the reference-frame baselines `a_i = (SSᵀ)⁻¹ S r_i` need three
+    /// independent lines of sight.
+    #[error("fewer than 3 satellites")]
+    TooFewSatellites,
+    /// More satellites than the compile-time capacity `N` of the observation set.
+    #[error("more satellites than the capacity")]
+    TooManySatellites,
+    /// The same satellite id was given twice in one epoch.
+    #[error("satellite listed twice")]
+    DuplicateSatellite,
+    /// A line-of-sight vector is not a unit vector (its norm is off 1 by more than 1e-3).
+    #[error("line of sight is not a unit vector")]
+    InvalidLineOfSight,
+    /// The lines of sight are (nearly) coplanar or collinear: `N = S W Sᵀ` is singular, so the
+    /// three components of a baseline cannot be separated.
+    #[error("lines of sight are coplanar or collinear")]
+    CoplanarLineOfSight,
+    /// A noise standard deviation, cofactor or wavelength is zero or negative.
+    #[error("noise, cofactor or wavelength is not positive")]
+    InvalidNoise,
+    /// A body baseline is shorter than 1 mm.
+    #[error("baseline of zero length")]
+    ZeroBaseline,
+    /// The first two body baselines are (nearly) parallel: the attitude about their common
+    /// direction is not observable.
+    #[error("baselines are collinear")]
+    CollinearBaselines,
+    /// The paper's formula (16) needs `G = BBᵀ` invertible: at least three non-coplanar
+    /// baselines (four non-coplanar antennas).
+    #[error("baselines are coplanar (paper formula needs 3 non-coplanar)")]
+    CoplanarBaselines,
+    /// Fewer baselines than the method needs (two for the snapshot solver, three for the
+    /// paper's formula).
+    #[error("too few baselines")]
+    TooFewBaselines,
+    /// The baseline noise correlation matrix is not symmetric positive definite.
+    #[error("baseline correlation is not positive definite")]
+    InvalidCorrelation,
+    /// The paper's formula (16) would return a reflection (`det Q < 0`), not a rotation.
+    #[error("paper formula (16) gives a reflection (det Q < 0)")]
+    Reflection,
+    /// A bounded iteration (Jacobi eigen-decomposition) reached its bound without converging.
+    #[error("eigen-decomposition did not converge")]
+    NotConverged,
+    /// A computation produced a non-finite or degenerate result from finite input.
+    #[error("snapshot computation failed numerically")]
+    Numerical,
+    /// An attitude could not be formed from the solution (normalization, angles).
+    #[error("attitude of the solution refused")]
+    Geometry(#[from] GeometryError),
+}
+
+impl Error for SnapshotError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::TooFewSatellites
+            | Self::TooManySatellites
+            | Self::DuplicateSatellite
+            | Self::InvalidLineOfSight
+            | Self::InvalidNoise
+            | Self::ZeroBaseline
+            | Self::CollinearBaselines
+            | Self::TooFewBaselines
+            | Self::InvalidCorrelation => ErrorKind::InvalidInput,
+            Self::CoplanarLineOfSight | Self::CoplanarBaselines | Self::Reflection => {
+                ErrorKind::Unobservable
+            }
+            Self::NotConverged => ErrorKind::NotConverged,
+            Self::Numerical => ErrorKind::Numerical,
+            Self::Geometry(e) => e.kind(),
+        }
     }
 }

@@ -16,17 +16,19 @@
 //! construction: the q-method cannot return `det C = −1`. It is exact for rank-2 profile
 //! matrices (two vector pairs), where `B` has a zero singular value: the top eigenvalue of `K`
 //! stays separated from the next by `2 σ₂(B)`. The eigen-decomposition is the bounded cyclic
-//! Jacobi of [`super::eigen`] (at most [`super::eigen::JACOBI_MAX_SWEEPS`] sweeps).
+//! Jacobi of [`crate::linalg::symmetric_eigen`] (at most [`crate::linalg::EIGEN_MAX_SWEEPS`] sweeps).
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
+use crate::attitude::snapshot::SnapshotError;
 use crate::geometry::Quaternion;
-use crate::{real, Real, SnapshotError};
+use crate::{real, Real};
 
-use super::eigen::symmetric_eigen;
+use crate::linalg::symmetric_eigen;
 
 /// One vector pair of Wahba's problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WahbaPair<T = f32> {
     /// The vector in body axes (any length; it is used as given).
     pub body: Vector3<T>,
@@ -38,6 +40,7 @@ pub struct WahbaPair<T = f32> {
 
 /// The solution of Wahba's problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WahbaSolution<T = f32> {
     /// The optimal attitude `q_rb` (body to reference), unit, scalar part `≥ 0`.
     pub q_rb: Quaternion<T>,
@@ -51,6 +54,7 @@ pub struct WahbaSolution<T = f32> {
 /// the gain. Add pairs with [`WahbaProblem::add`], then [`WahbaProblem::solve`]. No buffer of
 /// pairs is kept.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WahbaProblem<T = f32> {
     b: Matrix3<T>,
     z: Vector3<T>,
@@ -132,8 +136,7 @@ impl<T: Real> WahbaProblem<T> {
         }
         let x = vectors.column(0);
         let q = Quaternion::new(x[3], x[0], x[1], x[2])
-            .normalize()
-            .map_err(|_| SnapshotError::Numerical)?
+            .normalize()?
             .canonical();
         let half: T = real(0.5);
         Ok(WahbaSolution {

@@ -2,9 +2,10 @@
 
 use nalgebra::{Cholesky, RowSVector, SMatrix, SVector};
 
-use crate::{real, FilterError, Real};
+use crate::{real, Real};
 
 use super::NisGate;
+use crate::error::{Error, ErrorKind};
 
 /// A Gaussian estimate — state `x` and covariance `P` — with the steps of a (extended) Kalman
 /// filter on it.
@@ -24,6 +25,7 @@ use super::NisGate;
 /// * **transactional steps**: every input is checked for finiteness and every result is checked
 ///   before it is committed, so a step that fails leaves the filter exactly as it was.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Ekf<const N: usize, T = f32> {
     x: SVector<T, N>,
     p: SMatrix<T, N, N>,
@@ -32,6 +34,7 @@ pub struct Ekf<const N: usize, T = f32> {
 
 /// Result of a vector update.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct UpdateReport<const M: usize, T = f32> {
     /// The innovation `y = z − h(x̂)` that was offered, in measurement units.
     pub innovation: SVector<T, M>,
@@ -60,6 +63,7 @@ pub struct ScalarUpdateReport<T = f32> {
 
 /// Result of a sequential update of `M` scalar measurements.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SequentialUpdateReport<const M: usize, T = f32> {
     /// NIS of each scalar measurement at the moment it was processed.
     pub nis: SVector<T, M>,
@@ -391,4 +395,40 @@ fn symmetrize<T: Real, const N: usize>(p: &SMatrix<T, N, N>) -> SMatrix<T, N, N>
 /// True when `p` has a Cholesky factor and every element of it is finite.
 fn positive_definite<T: Real, const N: usize>(p: &SMatrix<T, N, N>) -> bool {
     Cholesky::new(*p).is_some_and(|c| all_finite(&c.l()))
+}
+
+/// Errors of the Kalman filter toolkit ([`crate::ekf`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum FilterError {
+    /// A state, covariance, transition, measurement, Jacobian or noise value was NaN or infinite.
+    #[error("non-finite filter input")]
+    NonFiniteInput,
+    /// A covariance given to the filter (initial covariance, process noise) is not symmetric
+    /// positive semi-definite with a positive diagonal.
+    #[error("covariance is not symmetric positive semi-definite")]
+    InvalidCovariance,
+    /// A measurement noise variance is zero or negative.
+    #[error("measurement noise variance is not positive")]
+    NonPositiveNoise,
+    /// The innovation covariance `S = H P Hᵀ + R` is not positive definite, so the update cannot
+    /// be weighed. Happens when `R` is not PD or `P` has lost definiteness.
+    #[error("innovation covariance is not positive definite")]
+    InnovationNotPositiveDefinite,
+    /// The step produced non-finite numbers from finite input (overflow). The state is
+    /// unchanged.
+    #[error("filter step overflowed")]
+    Numerical,
+}
+
+impl Error for FilterError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFiniteInput => ErrorKind::NonFinite,
+            Self::InvalidCovariance | Self::NonPositiveNoise => ErrorKind::InvalidInput,
+            Self::InnovationNotPositiveDefinite => ErrorKind::NotPositiveDefinite,
+            Self::Numerical => ErrorKind::Numerical,
+        }
+    }
 }

@@ -25,11 +25,11 @@
 //!     kf.update(&y, &h, &r, gate)?;
 //! }
 //! assert!((kf.state().y - 2.0).abs() < 0.3);
-//! # Ok::<(), gnss_attitude::FilterError>(())
+//! # Ok::<(), gnss_attitude::ekf::FilterError>(())
 //! ```
 
 mod filter;
 mod gate;
 
-pub use filter::{Ekf, ScalarUpdateReport, SequentialUpdateReport, UpdateReport};
+pub use filter::{Ekf, FilterError, ScalarUpdateReport, SequentialUpdateReport, UpdateReport};
 pub use gate::{chi_square_quantile, GateConfidence, NisGate};

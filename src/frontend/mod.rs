@@ -4,4 +4,4 @@
 
 pub mod nt1065;
 
-pub use nt1065::{Nt1065, Nt1065Config};
+pub use nt1065::{FrontEndError, Nt1065, Nt1065Config};

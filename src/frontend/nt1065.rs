@@ -27,10 +27,10 @@
 //! Two bytes, mode 0: `[address | R, data]`, `R = 0x80` for a read (the data byte then clocks
 //! the register out), 0 for a write; addresses 0–127.
 
+use crate::error::{Error, ErrorKind};
+use core::fmt;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::spi::SpiDevice;
-
-use crate::error::FrontEndError;
 
 /// Registers used by the driver (F unless marked).
 pub mod reg {
@@ -291,6 +291,7 @@ impl<SPI: SpiDevice> Nt1065<SPI> {
     /// [`FrontEndError::WrongChip`] (nothing is written), [`FrontEndError::InvalidConfig`],
     /// [`FrontEndError::Spi`].
     pub fn configure(&mut self, config: &Nt1065Config) -> Result<(), FrontEndError<SPI::Error>> {
+        // (`register_writes` refuses only with `InvalidConfig`, re-typed for this bus)
         let writes = config
             .register_writes()
             .map_err(|_| FrontEndError::InvalidConfig)?;
@@ -341,5 +342,33 @@ impl<SPI: SpiDevice> Nt1065<SPI> {
             delay.delay_ms(1);
         }
         Err(FrontEndError::NotReady)
+    }
+}
+
+/// Errors of the front-end drivers ([`crate::frontend`]); `E` is the SPI bus error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum FrontEndError<E> {
+    /// The SPI transfer failed.
+    #[error("SPI error: {0:?}")]
+    Spi(E),
+    /// A configuration value is out of range (PLL dividers, clock divider, register address).
+    #[error("front-end configuration out of range")]
+    InvalidConfig,
+    /// The chip ID read back is not the expected part's; nothing was written.
+    #[error("unexpected chip ID")]
+    WrongChip,
+    /// The part did not report ready (PLL lock, AOK) within the polling bound.
+    #[error("front end not ready within the polling bound")]
+    NotReady,
+}
+
+impl<E: fmt::Debug> Error for FrontEndError<E> {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::InvalidConfig | Self::WrongChip => ErrorKind::InvalidInput,
+            Self::Spi(_) | Self::NotReady => ErrorKind::NotConverged,
+        }
     }
 }

@@ -3,7 +3,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::{real, GeometryError, Real};
+use crate::geometry::GeometryError;
+use crate::{real, Real};
 
 use super::Quaternion;
 

@@ -2,7 +2,8 @@
 
 use nalgebra::Matrix3;
 
-use crate::{real, GeometryError, Real};
+use crate::geometry::GeometryError;
+use crate::{real, Real};
 
 use super::{rot_x, rot_y, rot_z, Quaternion};
 

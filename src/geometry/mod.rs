@@ -32,16 +32,81 @@
 //! Pure maths on finite numbers (products, [`Quaternion::rotate`], [`Quaternion::from_rotation_vector`])
 //! is total: finite input gives finite output. Conversions from data that may be corrupt
 //! ([`Quaternion::from_dcm`], [`Euler321::from_dcm`], [`nearest_rotation`]) check their input and
-//! return [`GeometryError`](crate::GeometryError). No conversion produces NaN at a singularity:
+//! return [`GeometryError`]. No conversion produces NaN at a singularity:
 //! gimbal lock and the 180° rotation are handled explicitly.
 
 mod dcm;
 mod euler;
 mod quaternion;
 
+use crate::error::{Error, ErrorKind};
 pub use dcm::{
     is_rotation, log_so3, nearest_rotation, orthonormality_error, rot_x, rot_y, rot_z,
     rotation_angle, skew, vee, NEAREST_ROTATION_MAX_ITERATIONS,
 };
 pub use euler::{Euler321, Paper003Angles};
 pub use quaternion::Quaternion;
+
+/// `angle` (rad) wrapped to `(−π, π]`.
+pub fn wrap_angle<T: crate::Real>(angle: T) -> T {
+    let pi = T::pi();
+    if angle > -pi && angle <= pi {
+        return angle;
+    }
+    let two_pi = T::two_pi();
+    let w = angle - two_pi * ((angle + pi) / two_pi).floor();
+    if w <= -pi {
+        w + two_pi
+    } else {
+        w
+    }
+}
+
+/// Errors of the geometry routines ([`crate::geometry`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum GeometryError {
+    /// An angle, vector, quaternion or matrix element was NaN or infinite.
+    #[error("non-finite geometry input")]
+    NonFinite,
+    /// A vector or quaternion that must be normalized has (near) zero length.
+    #[error("vector or quaternion of zero length")]
+    ZeroLength,
+    /// A matrix is too far from a rotation to be repaired: its determinant is not positive, or
+    /// it is (near) singular.
+    #[error("matrix is not close to a proper rotation")]
+    NotARotation,
+    /// The bounded orthonormalization did not converge within its iteration bound.
+    #[error("orthonormalization did not converge")]
+    NotConverged,
+}
+
+impl Error for GeometryError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::ZeroLength | Self::NotARotation => ErrorKind::InvalidInput,
+            Self::NotConverged => ErrorKind::NotConverged,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_angle as wrap;
+
+    #[test]
+    fn wrap_maps_onto_minus_pi_to_pi() {
+        use core::f64::consts::PI;
+        for (a, w) in [
+            (0.5, 0.5),
+            (PI, PI),
+            (-PI, PI),
+            (3.0 * PI, PI),
+            (7.0, 7.0 - 2.0 * PI),
+        ] {
+            assert!((wrap(a) - w).abs() < 1e-12, "{a}");
+        }
+    }
+}

@@ -4,7 +4,8 @@ use core::ops::Mul;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::{real, GeometryError, Real};
+use crate::geometry::GeometryError;
+use crate::{real, Real};
 
 use super::orthonormality_error;
 

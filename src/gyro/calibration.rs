@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::geometry::{skew, Euler321, Quaternion};
-use crate::{real, CalibrationError, Real};
+use crate::{real, Real};
 
 use super::calibration_types::{
     CalibrationEstimate, CalibratorConfig, EpochCounters, EpochEquations, EpochOutcome, SkipReason,
@@ -12,6 +12,8 @@ use super::calibration_types::{
 use super::error_model::{ErrorQuadratures, GyroErrorModel, ReferenceDriftModel};
 use super::lsq::{check_row, LeastSquaresAccumulator};
 use super::propagation::{AttitudePropagator, PulseDecoder, ResidualCentering};
+use crate::error::{Error, ErrorKind};
+use crate::linalg::LinalgError;
 
 /// In-flight gyro calibration against a reference attitude (paper 001).
 ///
@@ -31,6 +33,7 @@ use super::propagation::{AttitudePropagator, PulseDecoder, ResidualCentering};
 /// [`Self::add_reference`] belongs to the time of the last increment, which must complete a
 /// propagation step (an even number of samples since `t₀`).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct GyroCalibrator<G, R, A, const CM: usize, const DN: usize, const X: usize, T = f32> {
     config: CalibratorConfig<T>,
     model: G,
@@ -382,5 +385,77 @@ fn unit<T: Real>(q: &Quaternion<T>) -> Result<Quaternion<T>, CalibrationError> {
     if !(n >= real(0.9) && n <= real(1.1)) {
         return Err(CalibrationError::InputOutOfRange);
     }
+    // (a norm within 10 % of one normalizes unless it is non-finite, checked by the caller)
     q.normalize().map_err(|_| CalibrationError::InputOutOfRange)
+}
+
+/// Errors of the gyro propagation and calibration ([`crate::gyro`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum CalibrationError {
+    /// A gyro increment, pulse weight, reference attitude, measurement row or right-hand side
+    /// was NaN or infinite.
+    #[error("non-finite calibration input")]
+    NonFiniteInput,
+    /// A finite input is outside the accepted range: a measurement row or right-hand side
+    /// element larger than [`crate::gyro::MAX_ROW_ENTRY`] in magnitude (so that the accumulators
+    /// can never overflow), a pulse count whose angle exceeds one radian per sample, or a
+    /// reference quaternion far from unit norm.
+    #[error("calibration input out of range")]
+    InputOutOfRange,
+    /// A configuration value is invalid: a non-positive sample interval or pulse weight, a
+    /// negative threshold, or a rank tolerance outside `(0, 1)`.
+    #[error("invalid calibration configuration")]
+    InvalidConfig,
+    /// A reference attitude arrived between the two samples of a propagation step `H = 2h`: the
+    /// computed attitude exists only at step boundaries. Deliver references at even sample
+    /// counts.
+    #[error("reference epoch between the two samples of a step")]
+    MidStep,
+    /// Fewer rows were accumulated than there are unknowns (`rows`): no estimate and no
+    /// formal standard deviation can be formed.
+    #[error("only {rows} rows accumulated")]
+    TooFewRows {
+        /// Rows accumulated so far.
+        rows: u32,
+    },
+    /// The accumulated system is rank deficient: the window does not determine every unknown
+    /// (for example a constant angular rate, which cannot separate scale factors,
+    /// misalignments and biases). `rank` is the numerical rank found; retry with a window of
+    /// richer motion.
+    #[error("calibration window not observable (numerical rank {rank})")]
+    Unobservable {
+        /// Numerical rank of the accumulated system (less than the number of unknowns).
+        rank: u16,
+    },
+    /// The one-sided Jacobi singular-value iteration did not converge within
+    /// [`crate::linalg::SVD_MAX_SWEEPS`] sweeps.
+    #[error("Jacobi singular values did not converge")]
+    NotConverged,
+    /// The normal matrix passed the rank test but has no Cholesky factor: rounding destroyed
+    /// its definiteness (normal equations square the condition number).
+    #[error("normal matrix lost positive definiteness")]
+    NotPositiveDefinite,
+}
+
+impl From<LinalgError> for CalibrationError {
+    fn from(e: LinalgError) -> Self {
+        match e {
+            LinalgError::NonFinite => Self::NonFiniteInput,
+            LinalgError::NotConverged => Self::NotConverged,
+        }
+    }
+}
+
+impl Error for CalibrationError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFiniteInput => ErrorKind::NonFinite,
+            Self::InputOutOfRange | Self::InvalidConfig | Self::MidStep => ErrorKind::InvalidInput,
+            Self::TooFewRows { .. } | Self::Unobservable { .. } => ErrorKind::Unobservable,
+            Self::NotConverged => ErrorKind::NotConverged,
+            Self::NotPositiveDefinite => ErrorKind::NotPositiveDefinite,
+        }
+    }
 }

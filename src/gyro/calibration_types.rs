@@ -3,7 +3,8 @@
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use crate::{real, CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::{real, Real};
 
 use super::lsq::{default_rank_tolerance, LsqSolution};
 use super::propagation::ResidualCentering;
@@ -70,6 +71,7 @@ impl<T: Real> CalibratorConfig<T> {
 /// The three equations (2.7) of one epoch `t_j`: `U_j x = z_j` with
 /// `U_j = [2Φ(p_j), Γ_j Θ(t_j), Γ_j Ψ(t_j, t₀)]`, `Γ_j = ½ [p₀ⱼ E₃ − Φ(p_j)]` (eq. (5.7)).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EpochEquations<const X: usize, T = f32> {
     /// The rows `U_j` (`3 × X`), columns ordered as `x = [w₀; c; d]`.
     pub rows: SMatrix<T, 3, X>,
@@ -93,6 +95,7 @@ pub enum SkipReason {
 
 /// What became of one reference epoch.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum EpochOutcome<const X: usize, T = f32> {
     /// The epoch's three equations were accumulated.
     Used(EpochEquations<X, T>),
@@ -114,6 +117,7 @@ pub struct EpochCounters {
 
 /// The calibration result: `x̂ = [ŵ₀; ĉ; d̂]` with formal standard deviations.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CalibrationEstimate<const CM: usize, const DN: usize, const X: usize, T = f32> {
     /// `ŵ₀`: error of the initial computed attitude `M(t₀)` (half-angle vector, rad, frame
     /// `K ≈ I`): `Λ(t₀) ≈ (1 + w₀) ∘ M(t₀)`.

@@ -137,6 +137,7 @@ impl<T: Real> ReferenceDriftModel<T, 6> for AnchorErrorAndDrift {
 /// rule on `Bᵀ` with the rate of the step, local error `O(H³)` as the paper specifies. `Bᵀ` is
 /// the rotation from gyro axes to the computed frame `K`, the DCM of `M`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ErrorQuadratures<const CM: usize, const DN: usize, T = f32> {
     theta: SMatrix<T, 3, CM>,
     correction_integral: Vector3<T>,

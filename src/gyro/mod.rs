@@ -38,7 +38,7 @@
 //! use gnss_attitude::gyro::{CalibratorConfig, PaperCalibrator, SqrtInformation};
 //! use nalgebra::Vector3;
 //!
-//! # fn main() -> Result<(), gnss_attitude::CalibrationError> {
+//! # fn main() -> Result<(), gnss_attitude::gyro::CalibrationError> {
 //! let h = 0.02; // gyro sample interval, s
 //! let mut cal = PaperCalibrator::<SqrtInformation<15>>::paper(
 //!     CalibratorConfig::new(h),
@@ -71,7 +71,7 @@ mod error_model;
 pub mod lsq;
 mod propagation;
 
-pub use calibration::GyroCalibrator;
+pub use calibration::{CalibrationError, GyroCalibrator};
 pub use calibration_types::{
     CalibrationEstimate, CalibratorConfig, EpochCounters, EpochEquations, EpochOutcome, SkipReason,
 };
@@ -81,7 +81,7 @@ pub use error_model::{
 };
 pub use lsq::{
     default_rank_tolerance, LeastSquaresAccumulator, LsqSolution, NormalEquations,
-    ObservabilityReport, SqrtInformation, JACOBI_MAX_SWEEPS, MAX_ROW_ENTRY,
+    ObservabilityReport, SqrtInformation, MAX_ROW_ENTRY,
 };
 pub use propagation::{
     two_sample_rotation_vector, AttitudePropagator, PropagationStep, PulseDecoder,
@@ -89,7 +89,7 @@ pub use propagation::{
 };
 
 use crate::geometry::Quaternion;
-use crate::{CalibrationError, Real};
+use crate::Real;
 
 /// The paper's §6 calibrator: `m = 3` (`D = [D_I D_II E₃]`, 9 gyro parameters), `n = 1`
 /// (`G = E₃`, constant drift), 15 unknowns, accumulator `A`.

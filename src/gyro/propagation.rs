@@ -10,7 +10,8 @@
 use nalgebra::Vector3;
 
 use crate::geometry::Quaternion;
-use crate::{real, CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::{real, Real};
 
 /// The two-sample coning-corrected rotation vector over `H = 2h` from the increments of its two
 /// halves (rad, body axes): `φ = θ₁ + θ₂ + ⅔ θ₁ × θ₂`.
@@ -20,6 +21,7 @@ pub fn two_sample_rotation_vector<T: Real>(theta1: &Vector3<T>, theta2: &Vector3
 
 /// What one completed propagation step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PropagationStep<T = f32> {
     /// Sum of the two increments of the step, `θ₁ + θ₂` (rad, gyro axes).
     pub increment: Vector3<T>,
@@ -36,6 +38,7 @@ pub struct PropagationStep<T = f32> {
 /// every [`FOLD_ANGLE`] of rotation. In `f32` this makes the propagated attitude about ten
 /// times more accurate than composing every step into `M` (whose components are `O(1)`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AttitudePropagator<T = f32> {
     anchor: Quaternion<T>,
     delta: Quaternion<T>,
@@ -56,6 +59,7 @@ impl<T: Real> AttitudePropagator<T> {
         if !m0.is_finite() {
             return Err(CalibrationError::NonFiniteInput);
         }
+        // (finite, checked above: a refusal can only be a zero norm, which this variant names)
         let q = m0
             .normalize()
             .map_err(|_| CalibrationError::InputOutOfRange)?;

@@ -10,10 +10,10 @@
 //! let mut receiver = AttitudeReceiver::new(ExampleFlight::config(true))?;
 //! flight.fly(&mut receiver, 0, 600)?; // 0.6 s: cold start, then the fine filter
 //! let att = receiver.attitude();
-//! assert_eq!(att.source, AttitudeSource::OneStage);
+//! assert_eq!(att.source, AttitudeSource::Fine);
 //! let truth = flight.attitude(att.epoch);
 //! assert!(att.q_rb.angle_to(&truth) < 0.2f32.to_radians());
-//! # Ok::<(), gnss_attitude::ReceiverError>(())
+//! # Ok::<(), gnss_attitude::receiver::ReceiverError>(())
 //! ```
 
 use nalgebra::Vector3;
@@ -22,7 +22,7 @@ use crate::attitude::example::SKY;
 use crate::attitude::one_stage::{PromptIq, SatelliteObservation, GPS_L1_WAVELENGTH_M};
 use crate::geometry::Quaternion;
 use crate::noise::{SplitMix64, StandardNormal};
-use crate::ReceiverError;
+use crate::receiver::ReceiverError;
 
 use super::{AttitudeReceiver, GyroConfig, ReceiverConfig, SatelliteAiding, MAX_SATELLITES};
 
@@ -34,6 +34,8 @@ pub const NOISE_SIGMA: f32 = 40.0;
 pub const EPOCH_S: f32 = 1e-3;
 /// Gyro sample interval, s.
 pub const GYRO_H: f32 = 0.01;
+/// The line biases of B and C the flight's front end adds, rad.
+pub const LINE_BIAS_RAD: [f32; 2] = [0.7, -1.2];
 /// The body rate, body axes, rad/s.
 pub const BODY_RATE: [f32; 3] = [0.004, -0.003, 0.0105];
 
@@ -49,6 +51,7 @@ pub fn antennas() -> [[f32; 3]; 3] {
 
 /// A flight: the truth and the generator of its observations.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExampleFlight {
     rng: SplitMix64,
     normal: StandardNormal,
@@ -60,6 +63,8 @@ pub struct ExampleFlight {
     pub antenna_gain: [f32; 3],
     /// Data-sign inversion of one satellite from an epoch on: `(satellite index, epoch)`.
     pub bit_flip: Option<(usize, u64)>,
+    /// Line biases of B and C (the phase their RF chains add), rad: unknown to the receiver.
+    pub line_bias: [f32; 2],
 }
 
 impl ExampleFlight {
@@ -72,6 +77,7 @@ impl ExampleFlight {
             phase_offset: [[0.0; 3]; 8],
             antenna_gain: [1.0; 3],
             bit_flip: None,
+            line_bias: LINE_BIAS_RAD,
         }
     }
 
@@ -146,7 +152,9 @@ impl ExampleFlight {
             }
             let [pa, _, _] = positions;
             let psi_a = k * los.dot(&(c_rb * pa));
-            let offsets = self.phase_offset.get(i).copied().unwrap_or([0.0; 3]);
+            let mut offsets = self.phase_offset.get(i).copied().unwrap_or([0.0; 3]);
+            offsets[1] += self.line_bias[0];
+            offsets[2] += self.line_bias[1];
             let mut prompt = PromptIq::default();
             let outputs = prompt.i.iter_mut().zip(prompt.q.iter_mut());
             let antennas = positions
@@ -170,6 +178,30 @@ impl ExampleFlight {
             });
         }
         out
+    }
+
+    /// Epochs `from..to` without any signal (an eclipse of every antenna, a blockage): only
+    /// the gyro increments (when the receiver has a gyro), then the epochs are closed.
+    ///
+    /// # Errors
+    /// The receiver's.
+    pub fn coast(
+        &mut self,
+        receiver: &mut AttitudeReceiver,
+        from: u64,
+        to: u64,
+    ) -> Result<(), ReceiverError> {
+        let per_gyro = libm::roundf(GYRO_H / EPOCH_S) as u64;
+        if receiver.config().gyro.is_some() {
+            for k in (from..to).filter(|k| *k > 0 && k.checked_rem(per_gyro) == Some(0)) {
+                receiver.push_gyro_increment(
+                    &self.gyro_increment(k.checked_div(per_gyro).unwrap_or(1).saturating_sub(1)),
+                )?;
+                receiver.close_through(k.saturating_sub(1));
+            }
+        }
+        receiver.close_through(to.saturating_sub(1));
+        Ok(())
     }
 
     /// Flies epochs `from..to` into `receiver`: aiding every 100 epochs, a gyro increment

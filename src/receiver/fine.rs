@@ -1,203 +1,254 @@
-//! The fine attitude: paper 003's one-stage filter, run in the gyro-propagated frame.
-//!
-//! The filter estimates `U(α)` (eq. (2)) from prompts whose lines of sight are given in some
-//! frame. The receiver gives them in `F(t) = C_rK₀ M(t)`, the body frame as the gyro carries it
-//! from the anchor `C_rK₀` (chosen when the filter starts so that `F = Ĉ_rb`): then
-//! `U = C_Fb` stays near the identity, far from the gimbal lock of the paper's angles, and its
-//! rate is the gyro's error rather than the body's rotation, so a loop of a fraction of a hertz
-//! follows any tumble the gyro follows. The attitude is `C_rb = F(t) U(α̂)`. Without a gyro
-//! `M = I`, and the loop follows the motion itself; when its angles exceed
-//! [`ReceiverConfig::reanchor_angle_rad`] the frame is re-anchored on the estimate (a
-//! re-initialization around zero with the same covariance and rates).
-//!
-//! Covariance: `δθ_F = E δα` with `E`'s columns `vee(∂U/∂α_j Uᵀ)` (the reference-frame rotation
-//! per angle), so the body-frame rotation-vector covariance is `Uᵀ E P_α Eᵀ U`.
+//! The fine attitude stage: the gyro-aided filter when the gyro is usable, paper 003's loop
+//! when there is none (or it is excluded), behind one type.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
-use crate::attitude::one_stage::{
-    paper003_partials, AntennaArray, EpochReport, LockStatus, OneStageFilter, Prior,
-    SatelliteObservation,
+use crate::attitude::gyro_aided::{
+    GyroAidedConfig, GyroAidedError, GyroAidedFilter, GyroAidedPrior, GyroAidedReport,
+    PhaseDifferenceBlock,
 };
-use crate::geometry::{vee, Paper003Angles, Quaternion};
-use crate::{OneStageError, ReceiverError};
+use crate::attitude::one_stage::{LockStatus, OneStageError};
+use crate::ekf::GateConfidence;
+use crate::geometry::Quaternion;
 
-use super::config::ReceiverConfig;
+use super::config::{GyroConfig, ReceiverConfig};
+use super::fine_loop::LoopFine;
+use super::{AttitudeSource, LineBias};
 
-/// State dimension of the receiver's fine filter: three angles and their rates.
-pub const FINE_STATES: usize = 6;
+#[cfg(doc)]
+use super::ReceiverEvent;
+
+/// Blocks without an update after which the gyro-aided attitude counts as coasting.
+const FRESH_BLOCKS: u64 = 2;
+
+/// Epochs without an observation after which the loop's attitude is no longer fresh.
+const FRESH_EPOCHS: u64 = 2;
+
+/// The gyro-aided filter and the epoch it stands at.
+#[derive(Clone, Debug)]
+pub(crate) struct GyroFine {
+    filter: GyroAidedFilter<f32>,
+    /// Epoch (its centre) the filter's state belongs to.
+    epoch: u64,
+    /// `M` at that epoch.
+    m: Quaternion<f32>,
+    /// Last epoch with an accepted update.
+    pub last_update: u64,
+    /// Whether an update has been accepted since the start ([`ReceiverEvent::FineLocked`]
+    /// then).
+    pub locked: bool,
+}
 
 /// The fine stage.
+// (one of the two filters lives in the receiver at a time; without an allocator the larger
+// sets its size either way)
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
-pub(crate) struct FineStage {
-    pub filter: OneStageFilter<f32, FINE_STATES>,
-    /// `C_rK₀`: the anchor of the filter's frame, as a quaternion.
-    pub anchor: Quaternion<f32>,
-    /// The last epoch's report.
-    pub report: Option<EpochReport<f32>>,
-    /// Last epoch with observations.
-    pub last_update: u64,
+pub(crate) enum FineStage {
+    /// With the gyro.
+    Gyro(GyroFine),
+    /// Without it.
+    Loop(LoopFine),
+}
+
+/// The gyro-aided filter's configuration from the receiver's.
+fn gyro_aided_config(config: &ReceiverConfig, gyro: &GyroConfig) -> GyroAidedConfig<f32> {
+    GyroAidedConfig {
+        wavelength_m: config.wavelength_m(),
+        angle_random_walk: gyro.angle_random_walk,
+        bias_random_walk: gyro.bias_random_walk,
+        line_bias_random_walk: config.line_bias_random_walk,
+        gate: Some(GateConfidence::P999),
+    }
 }
 
 impl FineStage {
-    /// A fine filter started at `c_rb` (body to reference, at the epoch where the gyro's
-    /// attitude is `m`) with the body-frame rotation-vector covariance `covariance`.
-    pub fn start(
+    /// The gyro-aided stage from an attitude at `epoch` (gyro attitude `m` there).
+    #[allow(clippy::too_many_arguments)]
+    pub fn start_gyro(
         config: &ReceiverConfig,
-        c_rb: &Quaternion<f32>,
+        gyro: &GyroConfig,
+        baselines: [Vector3<f32>; 2],
+        q_rb: &Quaternion<f32>,
         covariance: &Matrix3<f32>,
+        bias_sigma: f32,
+        line_bias: &LineBias,
         m: &Quaternion<f32>,
+        epoch: u64,
+    ) -> Result<Self, GyroAidedError> {
+        let prior = GyroAidedPrior {
+            q_rb: *q_rb,
+            attitude_covariance: *covariance,
+            bias_sigma,
+            line_bias: Vector2::from(line_bias.rad),
+            line_bias_covariance: Matrix2::from_diagonal(&Vector2::from(
+                line_bias.sigma_rad.map(|s| s * s),
+            )),
+        };
+        let filter = GyroAidedFilter::new(gyro_aided_config(config, gyro), baselines, &prior, m)?;
+        Ok(Self::Gyro(GyroFine {
+            filter,
+            epoch,
+            m: *m,
+            last_update: epoch,
+            locked: false,
+        }))
+    }
+
+    /// The loop stage from an attitude at `epoch`.
+    pub fn start_loop(
+        config: &ReceiverConfig,
+        q_rb: &Quaternion<f32>,
+        covariance: &Matrix3<f32>,
+        line_bias: &LineBias,
         rates: Vector3<f32>,
         epoch: u64,
-    ) -> Result<Self, ReceiverError> {
-        let [a, b, c] = config.antenna_positions();
-        let array = AntennaArray::new([a, b, c]).map_err(|_| ReceiverError::InvalidConfig)?;
-        let prior = prior_at_identity(covariance, config.prior_rate_sigma, rates)?;
-        let filter = OneStageFilter::new(config.fine, array, &prior).map_err(map_error)?;
-        // F = C_rK₀ M = C_rb at this epoch: C_rK₀ = C_rb Mᵀ
-        let anchor = (*c_rb * m.conjugate())
-            .normalize()
-            .map_err(|_| ReceiverError::NonFinite)?;
-        Ok(Self {
-            filter,
-            anchor,
-            report: None,
-            last_update: epoch,
-        })
+    ) -> Result<Self, OneStageError> {
+        Ok(Self::Loop(LoopFine::start(
+            config, q_rb, covariance, line_bias, rates, epoch,
+        )?))
     }
 
-    /// `F(t) = C_rK₀ M(t)`.
-    pub fn frame(&self, m: &Quaternion<f32>) -> Quaternion<f32> {
-        self.anchor * *m
+    /// Whether this is the gyro-aided stage.
+    pub fn is_gyro(&self) -> bool {
+        matches!(self, Self::Gyro(_))
     }
 
-    /// One epoch: the observations (lines of sight in the reference frame) rotated into `F`.
-    pub fn step(
-        &mut self,
-        observations: &[SatelliteObservation<f32>],
-        m: &Quaternion<f32>,
-        epoch: u64,
-    ) -> Result<EpochReport<f32>, ReceiverError> {
-        let c_fr = self.frame(m).to_dcm().transpose();
-        let mut rotated =
-            heapless::Vec::<SatelliteObservation<f32>, { super::MAX_SATELLITES }>::new();
-        for obs in observations {
-            let los = c_fr * Vector3::from(obs.los);
-            let mut o = *obs;
-            o.los = [los.x, los.y, los.z];
-            rotated
-                .push(o)
-                .map_err(|_| ReceiverError::TooManySatellites)?;
+    /// The attitude when the gyro's attitude is `m` (the loop ignores `m`).
+    pub fn attitude(&self, m: &Quaternion<f32>) -> Quaternion<f32> {
+        match self {
+            Self::Gyro(g) => g.filter.attitude(m),
+            Self::Loop(l) => l.attitude(),
         }
-        let report = self.filter.step(&rotated).map_err(map_error)?;
-        if !rotated.is_empty() {
+    }
+
+    /// The body-frame covariance at `epoch` (a gyro-aided coast grows it with the gyro's
+    /// noise up to that epoch), rad².
+    pub fn covariance_at(
+        &self,
+        epoch: u64,
+        m: &Quaternion<f32>,
+        config: &ReceiverConfig,
+    ) -> Matrix3<f32> {
+        match self {
+            Self::Gyro(g) => {
+                let tau = epoch.saturating_sub(g.epoch) as f32 * config.epoch_s;
+                g.filter
+                    .predicted_attitude_covariance(&(g.m.conjugate() * *m), tau)
+            }
+            Self::Loop(l) => l.covariance(),
+        }
+    }
+
+    /// Last epoch the stage had an update.
+    pub fn last_update(&self) -> u64 {
+        match self {
+            Self::Gyro(g) => g.last_update,
+            Self::Loop(l) => l.last_update,
+        }
+    }
+
+    /// What the attitude at `epoch` counts as: the fine attitude while it updates, a coast
+    /// on the gyro while it does not (gyro-aided only), `None` when it is not usable (the
+    /// loop before lock, or coasting without a gyro).
+    pub fn source_at(&self, epoch: u64, config: &ReceiverConfig) -> Option<AttitudeSource> {
+        match self {
+            Self::Gyro(g) => {
+                let block = u64::from(config.block_epochs);
+                let fresh = epoch.saturating_sub(g.last_update)
+                    <= FRESH_BLOCKS.saturating_mul(block).saturating_add(block);
+                Some(if fresh {
+                    AttitudeSource::Fine
+                } else {
+                    AttitudeSource::GyroCoast
+                })
+            }
+            Self::Loop(l) => {
+                let fresh = epoch.saturating_sub(l.last_update) <= FRESH_EPOCHS;
+                (l.lock() == LockStatus::Locked && fresh).then_some(AttitudeSource::Fine)
+            }
+        }
+    }
+
+    /// The line biases the stage holds.
+    pub fn line_bias(&self) -> LineBias {
+        match self {
+            Self::Gyro(g) => {
+                let b = g.filter.line_bias();
+                let p = g.filter.line_bias_covariance();
+                LineBias {
+                    rad: [b.x, b.y],
+                    sigma_rad: [
+                        libm::sqrtf(p[(0, 0)].max(0.0)),
+                        libm::sqrtf(p[(1, 1)].max(0.0)),
+                    ],
+                    known: true,
+                }
+            }
+            Self::Loop(l) => l.line_bias(),
+        }
+    }
+
+    /// The loop's lock verdict (the gyro-aided stage has no lock detector: it is locked by
+    /// construction once started from a fix, and checked by the integrity monitor).
+    pub fn lock(&self) -> Option<LockStatus> {
+        match self {
+            Self::Gyro(_) => None,
+            Self::Loop(l) => Some(l.lock()),
+        }
+    }
+
+    /// The gyro-aided filter, if that is the stage.
+    pub fn gyro_mut(&mut self) -> Option<&mut GyroFine> {
+        match self {
+            Self::Gyro(g) => Some(g),
+            Self::Loop(_) => None,
+        }
+    }
+
+    /// The loop, if that is the stage.
+    pub fn loop_mut(&mut self) -> Option<&mut LoopFine> {
+        match self {
+            Self::Gyro(_) => None,
+            Self::Loop(l) => Some(l),
+        }
+    }
+}
+
+impl GyroFine {
+    /// Predicts to `epoch` (gyro attitude `m` there) and updates with the block's phase
+    /// differences; returns the report (its bias correction for the gyro).
+    pub fn update(
+        &mut self,
+        epoch: u64,
+        m: &Quaternion<f32>,
+        blocks: &[PhaseDifferenceBlock<f32>],
+        epoch_s: f32,
+    ) -> Result<GyroAidedReport<f32>, GyroAidedError> {
+        let mut next = self.filter.clone();
+        let tau = epoch.saturating_sub(self.epoch) as f32 * epoch_s;
+        next.predict(&(self.m.conjugate() * *m), tau)?;
+        let report = next.update(m, blocks)?;
+        self.filter = next;
+        self.epoch = epoch;
+        self.m = *m;
+        if report.accepted > 0 {
             self.last_update = epoch;
         }
-        self.report = Some(report);
         Ok(report)
     }
 
-    /// The filter's lock verdict.
-    pub fn lock(&self) -> LockStatus {
-        self.filter.lock_status()
-    }
-
-    /// `C_Fb = U(α̂)`.
-    pub fn relative(&self) -> Quaternion<f32> {
-        Quaternion::from_dcm(&self.filter.attitude()).unwrap_or_default()
-    }
-
-    /// The attitude `C_rb = F U(α̂)` with `M = m`.
-    pub fn attitude(&self, m: &Quaternion<f32>) -> Quaternion<f32> {
-        let q = self.frame(m) * self.relative();
-        q.normalize().unwrap_or(q)
-    }
-
-    /// Body-frame rotation-vector covariance, rad².
-    pub fn covariance(&self) -> Matrix3<f32> {
-        let angles = self.filter.angles();
+    /// Standard deviation of the attitude at `epoch` (largest axis), rad.
+    pub fn sigma_at(&self, epoch: u64, m: &Quaternion<f32>, epoch_s: f32) -> f32 {
+        let tau = epoch.saturating_sub(self.epoch) as f32 * epoch_s;
         let p = self
             .filter
-            .angle_covariance()
-            .unwrap_or_else(Matrix3::zeros);
-        body_covariance(&angles, &p)
+            .predicted_attitude_covariance(&(self.m.conjugate() * *m), tau);
+        libm::sqrtf(p[(0, 0)].max(p[(1, 1)]).max(p[(2, 2)]).max(0.0))
     }
 
-    /// The largest of `|α|, |β|, |γ|`, rad.
-    pub fn largest_angle(&self) -> f32 {
-        let a = self.filter.angles();
-        a.alpha.abs().max(a.beta.abs()).max(a.gamma.abs())
-    }
-
-    /// Re-anchors the frame on the current estimate (at gyro attitude `m`) and restarts the
-    /// filter around zero with the same covariance and rates.
-    pub fn reanchor(
-        &mut self,
-        config: &ReceiverConfig,
-        m: &Quaternion<f32>,
-    ) -> Result<(), ReceiverError> {
-        let c_rb = self.attitude(m);
-        let cov = self.covariance();
-        let rates = self.filter.rates();
-        let mut prior = prior_at_identity(&cov, config.prior_rate_sigma, rates)?;
-        // keep the learned rates' covariance
-        let p = self.filter.estimate().covariance();
-        let layout = *self.filter.layout();
-        for i in 0..3 {
-            for j in 0..3 {
-                if let (Some(Some(ri)), Some(Some(rj))) = (layout.rate.get(i), layout.rate.get(j)) {
-                    if let (Some(dst), Some(v)) =
-                        (prior.rate_covariance.get_mut((i, j)), p.get((*ri, *rj)))
-                    {
-                        *dst = *v;
-                    }
-                }
-            }
-        }
-        let mut filter = self.filter.clone();
-        filter.reinitialize(&prior).map_err(map_error)?;
-        let anchor = (c_rb * m.conjugate())
-            .normalize()
-            .map_err(|_| ReceiverError::NonFinite)?;
-        self.filter = filter;
-        self.anchor = anchor;
-        Ok(())
-    }
-}
-
-/// A prior at `U = I` from a body-frame rotation-vector covariance.
-fn prior_at_identity(
-    covariance: &Matrix3<f32>,
-    rate_sigma: f32,
-    rates: Vector3<f32>,
-) -> Result<Prior<f32>, ReceiverError> {
-    let mut prior =
-        Prior::from_attitude(&Matrix3::identity(), covariance, rate_sigma).map_err(map_error)?;
-    prior.rates = rates;
-    Ok(prior)
-}
-
-/// `Uᵀ E P Eᵀ U`: the covariance of the angles (rad²) as a body-frame rotation vector.
-pub(crate) fn body_covariance(angles: &Paper003Angles<f32>, p: &Matrix3<f32>) -> Matrix3<f32> {
-    let u = angles.to_dcm();
-    let [da, db, dg] = paper003_partials(angles);
-    let e = Matrix3::from_columns(&[
-        vee(&(da * u.transpose())),
-        vee(&(db * u.transpose())),
-        vee(&(dg * u.transpose())),
-    ]);
-    let m = u.transpose() * e;
-    let c = m * p * m.transpose();
-    (c + c.transpose()) * 0.5
-}
-
-fn map_error(e: OneStageError) -> ReceiverError {
-    match e {
-        OneStageError::NonFiniteInput => ReceiverError::NonFinite,
-        OneStageError::InvalidConfig | OneStageError::DegenerateArray => {
-            ReceiverError::InvalidConfig
-        }
-        OneStageError::TooManySatellites => ReceiverError::TooManySatellites,
-        _ => ReceiverError::InvalidInput,
+    /// Standard deviation of the gyro bias error, rad/s.
+    pub fn bias_sigma(&self) -> Vector3<f32> {
+        self.filter.bias_sigma()
     }
 }

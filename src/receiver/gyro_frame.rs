@@ -6,21 +6,24 @@
 //!
 //! `M` maps gyro (body) axes to the computed inertial frame `K`; with a perfect gyro `K` is
 //! fixed, so the fine filter works in the frame `F(t) = C_rK₀ M(t)`, in which the body's
-//! attitude is constant up to the gyro's errors (see [`super::fine`]).
+//! attitude is constant up to the gyro's errors (see the `fine` stage).
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::geometry::Quaternion;
+use crate::gyro::CalibrationError;
 use crate::gyro::{
     AttitudePropagator, BiasOnly, CalibratorConfig, EpochOutcome, GyroCalibrator,
     LeastSquaresAccumulator, PulseDecoder, ReferenceDriftModel, ResidualCentering, SqrtInformation,
 };
-use crate::{CalibrationError, Real, ReceiverError};
+use crate::receiver::ReceiverError;
+use crate::Real;
 
 use super::config::GyroConfig;
 
 /// The reference (GNSS attitude) does not drift: no drift unknowns (`n = 0`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct NoReferenceDrift;
 
 impl<T: Real> ReferenceDriftModel<T, 0> for NoReferenceDrift {
@@ -36,6 +39,13 @@ const W0_PRIOR_WEIGHT: f32 = 0.5;
 /// The calibrator the receiver runs: `x = [w₀; c₇..₉]`, 6 unknowns, Givens accumulator.
 pub type BiasCalibrator =
     GyroCalibrator<BiasOnly, NoReferenceDrift, SqrtInformation<6>, 3, 0, 6, f32>;
+
+/// Longest extrapolation of `M` beyond the last propagation step, s.
+pub(crate) const MAX_EXTRAPOLATION_S: f32 = 1.0;
+
+/// Largest increment (rad, any axis) a sample may hold: beyond, it is refused as an input
+/// error (below, above the maximum rate, it is a gyro fault).
+const MAX_INCREMENT_RAD: f32 = 1.0;
 
 /// The receiver's gyro.
 #[derive(Clone, Debug)]
@@ -66,7 +76,8 @@ pub struct CalibrationReport {
     pub started: u32,
     /// Windows solved.
     pub solved: u32,
-    /// Windows whose estimate was applied.
+    /// Windows whose estimate was determined well enough to count (σ below the configured
+    /// limit); the estimate is reported and compared, the fine filter applies its own.
     pub applied: u32,
     /// Windows abandoned (a reference or an increment the calibrator refused, or a solve
     /// that failed: rank deficient, not converged).
@@ -78,18 +89,17 @@ pub struct CalibrationReport {
 }
 
 impl GyroFrame {
-    pub fn new(config: GyroConfig) -> Result<Self, ReceiverError> {
+    pub fn new(config: GyroConfig) -> Result<Self, CalibrationError> {
         let decoder = match config.pulse_weight_rad {
-            Some(s) => Some(
-                PulseDecoder::new(s, ResidualCentering::IncrementCorrection)
-                    .map_err(|_| ReceiverError::InvalidConfig)?,
-            ),
+            Some(s) => Some(PulseDecoder::new(
+                s,
+                ResidualCentering::IncrementCorrection,
+            )?),
             None => None,
         };
         Ok(Self {
             config,
-            propagator: AttitudePropagator::new(Quaternion::identity())
-                .map_err(|_| ReceiverError::InvalidConfig)?,
+            propagator: AttitudePropagator::new(Quaternion::identity())?,
             decoder,
             samples: 0,
             rate: Vector3::zeros(),
@@ -106,6 +116,27 @@ impl GyroFrame {
         self.samples as f64 * seconds(self.config.sample_interval_s)
     }
 
+    /// Re-anchors the gyro's clock at `t` seconds (after an epoch jump: the samples in between
+    /// never came) with `M` restarted at the identity; the bias and calibration report stay.
+    pub fn resync(&mut self, t: f64) {
+        let h = seconds(self.config.sample_interval_s);
+        let samples = if h > 0.0 { libm::floor(t / h) } else { 0.0 };
+        // an even count: the propagator starts on a step boundary
+        let samples = (samples.max(0.0) as u64) & !1;
+        self.samples = samples;
+        self.window_start = samples;
+        self.propagator =
+            AttitudePropagator::new(Quaternion::identity()).unwrap_or(self.propagator);
+        self.rate = Vector3::zeros();
+        self.calibrator = None;
+    }
+
+    /// The corrected rate of the last propagation step, rad/s, gyro axes (an implausible
+    /// sample repeats the last good one).
+    pub fn rate(&self) -> Vector3<f32> {
+        self.rate
+    }
+
     /// Increments received.
     pub fn samples(&self) -> u64 {
         self.samples
@@ -118,7 +149,9 @@ impl GyroFrame {
 
     /// Decodes pulse counts into an increment (rad, gyro axes).
     pub fn decode(&mut self, counts: [i32; 3]) -> Result<Vector3<f32>, ReceiverError> {
-        let mut d = self.decoder.ok_or(ReceiverError::InvalidInput)?;
+        let mut d = self
+            .decoder
+            .ok_or(ReceiverError::Gyro(CalibrationError::InvalidConfig))?;
         let theta = d.decode(counts).map_err(map_calibration)?;
         self.decoder = Some(d);
         Ok(theta)
@@ -126,14 +159,27 @@ impl GyroFrame {
 
     /// Takes one increment (rad, gyro axes): corrected by the bias estimate, propagated, and
     /// passed (uncorrected; the calibrator applies the correction itself) to the calibrator.
-    pub fn push(&mut self, theta: &Vector3<f32>) -> Result<(), ReceiverError> {
+    /// An increment above the maximum rate is a fault: the last good rate is propagated
+    /// instead, the calibration window is abandoned, and `false` is returned.
+    pub fn push(&mut self, theta: &Vector3<f32>) -> Result<bool, ReceiverError> {
+        if !theta.iter().all(|v| v.is_finite()) {
+            return Err(ReceiverError::NonFinite);
+        }
+        if theta.amax() > MAX_INCREMENT_RAD {
+            return Err(ReceiverError::Gyro(CalibrationError::InputOutOfRange));
+        }
         let h = self.config.sample_interval_s;
-        let corrected = theta - self.bias * h;
+        let plausible = theta.amax() <= self.config.max_rate_rad_s * h;
+        let corrected = if plausible {
+            theta - self.bias * h
+        } else {
+            self.rate * h
+        };
         let mut propagator = self.propagator;
         let step = propagator.push(&corrected).map_err(map_calibration)?;
         let mut calibrator = self.calibrator.clone();
         if let Some(c) = calibrator.as_mut() {
-            if c.push_increment(theta).is_err() {
+            if !plausible || c.push_increment(theta).is_err() {
                 calibrator = None;
                 self.report.failed += 1;
             }
@@ -143,17 +189,19 @@ impl GyroFrame {
         if let Some(s) = step {
             self.rate = s.rotation_vector / (2.0 * h);
         }
-        self.samples += 1;
-        Ok(())
+        self.samples = self.samples.saturating_add(1);
+        Ok(plausible)
     }
 
-    /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate.
+    /// `M(t)` at `t` seconds: the last step's attitude extrapolated with its rate (for at
+    /// most [`MAX_EXTRAPOLATION_S`] either way: a gyro that stopped delivering is excluded by
+    /// the receiver, not extrapolated).
     pub fn attitude_at(&self, t: f64) -> Quaternion<f32> {
         let h = seconds(self.config.sample_interval_s);
         // the propagator holds M at the last completed step
-        let step_samples = self.samples - (self.samples % 2);
+        let step_samples = self.samples - self.samples % 2;
         let t_step = step_samples as f64 * h;
-        let dt = (t - t_step) as f32;
+        let dt = ((t - t_step) as f32).clamp(-MAX_EXTRAPOLATION_S, MAX_EXTRAPOLATION_S);
         let m = self.propagator.attitude() * Quaternion::from_rotation_vector(&(self.rate * dt));
         m.normalize().unwrap_or(m)
     }
@@ -220,7 +268,8 @@ impl GyroFrame {
                 return false;
             }
         }
-        let elapsed = (self.samples - self.window_start) as f32 * self.config.sample_interval_s;
+        let elapsed =
+            self.samples.saturating_sub(self.window_start) as f32 * self.config.sample_interval_s;
         if elapsed < self.config.calibration_window_s {
             self.calibrator = Some(c);
             return false;
@@ -236,7 +285,7 @@ impl GyroFrame {
                         .iter()
                         .all(|&s| s <= self.config.calibration_max_sigma);
                 if usable {
-                    self.bias = est.c;
+                    // reported (the fine filter estimates the bias it applies itself)
                     self.calibrations += 1;
                     self.report.applied += 1;
                 }
@@ -263,6 +312,6 @@ pub(crate) fn seconds(step: f32) -> f64 {
 fn map_calibration(e: CalibrationError) -> ReceiverError {
     match e {
         CalibrationError::NonFiniteInput => ReceiverError::NonFinite,
-        _ => ReceiverError::InvalidInput,
+        e => ReceiverError::Gyro(e),
     }
 }

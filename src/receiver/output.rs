@@ -16,13 +16,69 @@ pub enum AttitudeSource {
     /// The snapshot solution of the latest window with fixed ambiguities (paper 002),
     /// propagated by the gyro to the current epoch.
     Snapshot,
-    /// The one-stage filter (paper 003), locked: the fine attitude.
-    OneStage,
+    /// The fine filter: the gyro-aided filter while it updates, or paper 003's one-stage
+    /// loop (without a gyro) while it is locked.
+    Fine,
     /// The gyro (paper 001) carrying the last fine attitude while the fine filter has no
-    /// usable input (an antenna blocked, too few satellites, false lock).
+    /// usable input (an antenna blocked, too few satellites, false lock); the covariance
+    /// grows with the gyro's noise and the uncertainty of its bias.
     GyroCoast,
-    /// The rigid-body filter on baselines and velocity differences (paper 000).
-    RigidBody,
+}
+
+/// Why the receiver dropped its attitude and started cold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LossReason {
+    /// The gyro carried the attitude longer than [`ReceiverConfig::max_coast_s`](super::ReceiverConfig::max_coast_s).
+    CoastTooLong,
+    /// No fine update for longer than
+    /// [`ReceiverConfig::max_gap_without_gyro_s`](super::ReceiverConfig::max_gap_without_gyro_s)
+    /// without a gyro (or with the gyro excluded).
+    GapWithoutGyro,
+    /// The signals returned, but the attitude had become too uncertain to predict the single
+    /// differences to a fraction of a cycle.
+    TooUncertainToResume,
+    /// The epochs jumped ahead (a gap in the input longer than the coast limit).
+    EpochJump,
+    /// An integrity check found the fine attitude inconsistent with the signals and no
+    /// independent fix was available to restart it from.
+    IntegrityFailure,
+}
+
+/// The last independent integrity check: a fresh integer fix against the fine attitude.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct IntegrityCheck {
+    /// Epoch (the window's centre).
+    pub epoch: u64,
+    /// Angle between the fix and the fine attitude, rad.
+    pub angle_rad: f32,
+    /// `dᵀ (P_fine + P_fix)⁻¹ d` (χ², 3 degrees of freedom, when both are consistent).
+    pub nees: f32,
+    /// Largest 1σ axis of the fix, rad.
+    pub fix_sigma_rad: f32,
+    /// Largest 1σ axis of the fine attitude, rad.
+    pub fine_sigma_rad: f32,
+    /// Whether it raised an alarm.
+    pub alarm: bool,
+}
+
+/// The receiver's judgement of its own output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Integrity {
+    /// No attitude, or none checked yet.
+    #[default]
+    Unknown,
+    /// The last independent check agreed with the attitude and the fine filter's residuals
+    /// are consistent with its noise model.
+    Consistent,
+    /// The fine filter's residuals exceed what its covariance allows: the reported
+    /// covariance is inflated by the excess until the next independent check.
+    Degraded,
+    /// An independent check disagreed with the attitude: it is being restarted; do not use
+    /// the attitude for control.
+    Alarm,
 }
 
 /// The receiver's view of its own state.
@@ -47,10 +103,25 @@ pub struct ReceiverHealth {
     pub gyro_calibrated: bool,
     /// Time since the fine filter's last update, s (0 while it updates).
     pub coasting_s: f32,
+    /// The gyro is excluded (faulty samples, or inconsistent with the carrier phase): the
+    /// fine filter runs without it until it agrees with the signals again.
+    pub gyro_excluded: bool,
+    /// Gyro samples refused as implausible (above the configured maximum rate) since the
+    /// start.
+    pub gyro_faults: u32,
+    /// The receiver's judgement of its attitude.
+    pub integrity: Integrity,
+    /// Cold starts after a loss of the attitude since the receiver was created.
+    pub cold_restarts: u32,
+    /// Estimated line biases of B and C, rad (zero before the first fix).
+    pub line_bias_rad: [f32; 2],
+    /// Their standard deviations, rad (zero before the first fix).
+    pub line_bias_sigma_rad: [f32; 2],
 }
 
 /// An attitude with its uncertainty.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct StageEstimate {
     /// Epoch the estimate belongs to.
     pub epoch: u64,
@@ -62,6 +133,7 @@ pub struct StageEstimate {
 
 /// The receiver's attitude, as [`super::AttitudeReceiver::attitude`] reports it.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ReceiverAttitude {
     /// Epoch the attitude belongs to.
     pub epoch: u64,
@@ -165,8 +237,34 @@ pub enum ReceiverEvent {
         /// PRN.
         prn: u8,
     },
-    /// A gyro calibration window was solved and applied.
+    /// A gyro calibration window (paper 001) was solved with a σ below the configured
+    /// limit.
     GyroCalibrated {
+        /// Epoch.
+        epoch: u64,
+    },
+    /// The attitude was lost: fixes dropped, the cold start runs again.
+    AttitudeLost {
+        /// Epoch.
+        epoch: u64,
+        /// Why.
+        reason: LossReason,
+    },
+    /// An independent integer fix disagreed with the fine attitude beyond their covariances;
+    /// the fine filter was restarted from the fix.
+    IntegrityAlarm {
+        /// Epoch.
+        epoch: u64,
+        /// Angle between the two attitudes, mrad (saturating).
+        angle_mrad: u16,
+    },
+    /// The gyro was excluded.
+    GyroExcluded {
+        /// Epoch.
+        epoch: u64,
+    },
+    /// The gyro agrees with the signals again and is used.
+    GyroRestored {
         /// Epoch.
         epoch: u64,
     },
@@ -188,7 +286,11 @@ impl ReceiverEvent {
             | Self::AntennaBlocked { epoch, .. }
             | Self::AntennaRestored { epoch, .. }
             | Self::BitAnomaly { epoch, .. }
-            | Self::GyroCalibrated { epoch } => epoch,
+            | Self::GyroCalibrated { epoch }
+            | Self::AttitudeLost { epoch, .. }
+            | Self::IntegrityAlarm { epoch, .. }
+            | Self::GyroExcluded { epoch }
+            | Self::GyroRestored { epoch } => epoch,
         }
     }
 }

@@ -21,15 +21,16 @@
 
 use heapless::Vec;
 
+use super::config::ConfigError;
 use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
-use crate::attitude::one_stage::{AdapterConfig, EpochClock, ObservationAdapter};
+use crate::receiver::ReceiverError;
+use crate::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use crate::signal::{Prn, SampleBlock};
 use crate::tracking::acquisition::CROSS_CORRELATION_MARGIN;
 use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal, SearchResult,
 };
-use crate::{OneStageError, ReceiverError};
 
 /// What a [`SampleReceiver`] needs besides the [`ReceiverConfig`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,14 +125,6 @@ pub struct SampleReceiver<const S: usize, const N: usize> {
     frontier: Option<u64>,
 }
 
-fn adapter_error(e: OneStageError) -> ReceiverError {
-    match e {
-        OneStageError::NonFiniteInput => ReceiverError::NonFinite,
-        OneStageError::InvalidConfig => ReceiverError::InvalidConfig,
-        _ => ReceiverError::InvalidInput,
-    }
-}
-
 impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     /// A receiver with no channels.
     ///
@@ -139,16 +132,13 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     /// [`ReceiverError::InvalidConfig`] for an invalid receiver, acquisition, channel or
     /// adapter configuration, zero samples per epoch, or an FFT size `N` outside 1024–8192.
     pub fn new(receiver: ReceiverConfig, config: SampleFrontConfig) -> Result<Self, ReceiverError> {
-        let acquisition = Acquisition::<N>::new().map_err(|_| ReceiverError::InvalidConfig)?;
+        let acquisition = Acquisition::<N>::new().map_err(ConfigError::from)?;
         // the channel configuration is validated by a trial channel
-        Channel::<3>::new(
-            Prn::new(1).ok_or(ReceiverError::InvalidConfig)?,
-            &config.channel,
-        )?;
+        Channel::<3>::new(Prn::FIRST, &config.channel).map_err(ConfigError::from)?;
         Ok(Self {
-            adapter: ObservationAdapter::new(config.adapter).map_err(adapter_error)?,
+            adapter: ObservationAdapter::new(config.adapter).map_err(ConfigError::Adapter)?,
             clock: EpochClock::new(config.epoch_origin_sample, config.samples_per_epoch)
-                .map_err(adapter_error)?,
+                .map_err(ConfigError::Adapter)?,
             receiver: AttitudeReceiver::new(receiver)?,
             config,
             acquisition,
@@ -251,6 +241,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
             locked: false,
             last_lock_sample: self.frontier.unwrap_or(result.first_sample),
         };
+        // (checked for room above; the refused channel is dropped)
         self.channels
             .push((channel, status))
             .map_err(|_| ReceiverError::TooManySatellites)
@@ -307,7 +298,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
                     let obs = self
                         .adapter
                         .observe(&epoch, [0.0, 0.0, 1.0])
-                        .map_err(adapter_error)?;
+                        .map_err(ReceiverError::Adapter)?;
                     let (Some(obs), Some(k)) = (obs, self.clock.epoch_of(&epoch.correlations))
                     else {
                         continue;
@@ -377,14 +368,14 @@ fn sub_block<'a>(
     } else {
         SampleBlock::real(block.first_sample(), i)
     };
-    made.map_err(|e| ReceiverError::Tracking(crate::TrackingError::Signal(e)))
+    made.map_err(|e| ReceiverError::Tracking(crate::tracking::TrackingError::Signal(e)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::receiver::example::ExampleFlight;
-    use crate::AcquisitionError;
+    use crate::tracking::AcquisitionError;
 
     type Front = SampleReceiver<2, 1024>;
 

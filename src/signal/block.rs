@@ -1,6 +1,6 @@
 //! A block of decoded samples from all antennas, taken at the same instants (one clock).
 
-use crate::error::SignalError;
+use crate::signal::SignalError;
 
 /// Decoded samples of `A` antennas over the same sample instants: antenna `a`'s in-phase
 /// samples `i[a]` and, for complex baseband, quadrature samples `q[a]`; all slices have the

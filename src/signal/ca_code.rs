@@ -134,6 +134,9 @@ pub static CA_CODE_SIGNS: [[i8; 1024]; PRN_COUNT] = signs_all();
 pub struct Prn(u8);
 
 impl Prn {
+    /// PRN 1.
+    pub const FIRST: Self = Self(1);
+
     /// `Some` for 1–32.
     pub const fn new(prn: u8) -> Option<Self> {
         if prn >= 1 && prn as usize <= PRN_COUNT {

@@ -50,7 +50,7 @@ use super::kernels::{
     correlate_antenna, correlate_prompt, fill_carrier, fill_code, Replica, Scratch,
 };
 use super::nco::{CarrierNco, CodeNco, CODE_WRAP};
-use crate::error::SignalError;
+use crate::error::{Error, ErrorKind};
 
 /// Samples per replica chunk (the replica buffers live on the stack: about 2.5 KiB).
 pub const CHUNK: usize = 256;
@@ -480,6 +480,38 @@ impl<const A: usize> Correlator<A> {
             self.carrier_total = self.carrier_total.wrapping_add(advance);
             self.samples = self.samples.saturating_add(m as u32);
             done += m;
+        }
+    }
+}
+
+/// Errors of the correlators and NCOs ([`crate::signal`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SignalError {
+    /// A frequency, rate or phase was NaN or infinite.
+    #[error("non-finite NCO input")]
+    NonFinite,
+    /// A configuration value is out of range: sample rate outside 1.023–64 MHz, IF beyond the
+    /// sample rate, early/late offset outside (0, 1] chip, a carrier frequency beyond ±`f_s`/2,
+    /// a code rate more than 1 % off nominal, or no antennas.
+    #[error("correlator configuration out of range")]
+    InvalidConfig,
+    /// The antennas' sample slices of a block differ in length.
+    #[error("antenna sample slices differ in length")]
+    BlockLengthMismatch,
+    /// The cursor passed to the correlator lies beyond the end of the block.
+    #[error("cursor beyond the end of the sample block")]
+    CursorOutOfRange,
+}
+
+impl Error for SignalError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::InvalidConfig | Self::BlockLengthMismatch | Self::CursorOutOfRange => {
+                ErrorKind::InvalidInput
+            }
         }
     }
 }

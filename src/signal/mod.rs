@@ -9,7 +9,11 @@
 //!
 //! Integer arithmetic only in the sample loop; see [`correlator`] for the overflow analysis
 //! and the fixed-point error bound.
+//!
+//! For 1- and 2-bit front ends, [`bitwise`] correlates the samples as bit planes (32 per word,
+//! XOR and population counts) with the same interface and output ([`bitwise::BitCorrelator`]).
 
+pub mod bitwise;
 pub mod block;
 pub mod ca_code;
 pub mod correlator;
@@ -20,5 +24,7 @@ pub mod selftest;
 
 pub use block::SampleBlock;
 pub use ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};
-pub use correlator::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, SlaveTaps, Taps};
-pub use samples::SampleFormat;
+pub use correlator::{
+    Correlator, CorrelatorConfig, EpochCorrelations, Iq, SignalError, SlaveTaps, Taps,
+};
+pub use samples::{SampleError, SampleFormat};

@@ -15,7 +15,7 @@
 //! The field coding of the 2-bit formats is this crate's convention; a board that packs the
 //! bits otherwise needs a byte-wise remapping table before decoding (a 256-entry lookup).
 
-use crate::error::SampleError;
+use crate::error::{Error, ErrorKind};
 
 /// The format of raw sample bytes. See the module documentation for the layouts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -231,4 +231,27 @@ fn reduce16(v: i16, shift: u8) -> i8 {
         (v + (1 << (shift - 1))) >> shift
     };
     r.clamp(-128, 127) as i8
+}
+
+/// Errors of sample decoding ([`crate::signal::samples`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SampleError {
+    /// The format's parameters are out of range (a CS16 shift above 8, a multi-channel format
+    /// with 0 or more than 4 channels).
+    #[error("sample format parameters out of range")]
+    InvalidFormat,
+    /// The requested channel is not in the stream (channel ≥ the format's channel count).
+    #[error("channel not present in the sample stream")]
+    NoSuchChannel,
+    /// The byte slice ends inside a sample (odd CS8 length, CS16 length not a multiple of 4).
+    #[error("byte stream ends inside a sample")]
+    PartialSample,
+}
+
+impl Error for SampleError {
+    fn kind(&self) -> ErrorKind {
+        ErrorKind::InvalidInput
+    }
 }

@@ -3,7 +3,7 @@
 
 use super::correlator::{Correlator, CorrelatorConfig, EpochCorrelations};
 use super::{Prn, SampleBlock};
-use crate::error::SignalError;
+use crate::signal::SignalError;
 
 /// Samples per antenna and component of the self-test (one 1 ms code period at 2.6 Msps plus
 /// margin).

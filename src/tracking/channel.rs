@@ -45,10 +45,11 @@ pub use super::refine::{
     refine_frequency, refine_frequency_and_rate, REFINEMENT_EPOCHS, REFINEMENT_RANGE_HZ,
 };
 use super::xcorr::{cross_correlation_source, CrossCorrelationTest, SignalProbe};
-use crate::error::TrackingError;
+use crate::error::{Error, ErrorKind};
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::correlator::{Correlator, EpochCorrelations, Iq, Taps};
 use crate::signal::SampleBlock;
+use crate::signal::SignalError;
 
 /// Where a channel is in its life.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -273,7 +274,9 @@ impl<const A: usize> Channel<A> {
             return Err(TrackingError::NotStarted);
         }
         if *cursor > block.len() {
-            return Err(TrackingError::Signal(crate::SignalError::CursorOutOfRange));
+            return Err(TrackingError::Signal(
+                crate::signal::SignalError::CursorOutOfRange,
+            ));
         }
         if let Some(acq) = self.pending {
             let now = block.first_sample().wrapping_add(*cursor as u64);
@@ -560,5 +563,37 @@ fn cn0_of(e: &WindowEstimate, t: f32, long_window: bool) -> Cn0Estimate {
         window_s: e.epochs as f32 * t,
         long_window,
         quantization_limited: e.quantization_limited,
+    }
+}
+
+/// Errors of the tracking channel ([`crate::tracking::channel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum TrackingError {
+    /// A loop parameter or a hand-over value was NaN or infinite.
+    #[error("non-finite tracking input")]
+    NonFinite,
+    /// A loop parameter is out of range (a bandwidth outside 0–100 Hz, an empty window).
+    #[error("tracking configuration out of range")]
+    InvalidConfig,
+    /// The channel was asked to process samples before an acquisition was handed over.
+    #[error("channel not started")]
+    NotStarted,
+    /// The acquisition handed over is for another PRN.
+    #[error("acquisition result is for another PRN")]
+    WrongPrn,
+    /// The correlator refused a configuration, NCO setting or block.
+    #[error("correlator refused")]
+    Signal(#[from] SignalError),
+}
+
+impl Error for TrackingError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            Self::InvalidConfig | Self::NotStarted | Self::WrongPrn => ErrorKind::InvalidInput,
+            Self::Signal(e) => e.kind(),
+        }
     }
 }

@@ -1,8 +1,8 @@
 //! Configuration of a tracking channel.
 
 use super::lock::LockThresholds;
-use crate::error::TrackingError;
 use crate::signal::correlator::{CorrelatorConfig, SlaveTaps};
+use crate::tracking::TrackingError;
 
 /// Configuration of a channel (front end and loop parameters).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -20,15 +20,15 @@ use gnss_attitude::gyro::{
     default_rank_tolerance, CalibratorConfig, EpochOutcome, LeastSquaresAccumulator,
     NormalEquations, PaperCalibrator, SqrtInformation,
 };
-use gnss_attitude::attitude::one_stage::{
-    AdapterConfig, EpochClock, ObservationAdapter, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior,
-    PromptIq, SatelliteObservation, MAX_SATELLITES,
-};
+use gnss_attitude::attitude::one_stage::{EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, PhaseModel, Prior, PromptIq, SatelliteObservation, MAX_SATELLITES};
+use gnss_attitude::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use gnss_attitude::geometry::Paper003Angles;
 use gnss_attitude::signal::selftest::{
     run_correlator_self_test, signal_self_test_samples, SIGNAL_SELF_TEST_LEN, SIGNAL_SELF_TEST_RATE_HZ,
 };
-use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, Taps};
+use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
+use gnss_attitude::signal::bitwise::selftest::{pack_self_test, self_test_correlator, BIT_SELF_TEST_WORDS};
+use gnss_attitude::signal::bitwise::{BitBlock, CarrierLevels, CodeTable, PlaneBuffer, PlaneFormat, Resolution};
 use gnss_attitude::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, LockFlags, SearchResult, TrackingEpoch,
 };
@@ -44,6 +44,10 @@ pub static SIGNAL_SAMPLES: [[i8; SIGNAL_SELF_TEST_LEN]; 6] = [
     signal_self_test_samples(5),
     signal_self_test_samples(6),
 ];
+
+/// The bit-parallel correlator's code expansion table for 2.6 Msps (8 KiB), built at compile
+/// time into flash: the nominal code step `round(1.023e6 / 2.6e6 · 2³²)`.
+pub static CODE_TABLE_2M6: CodeTable = CodeTable::from_step((1.023e6 / 2.6e6 * 4_294_967_296.0 + 0.5) as u64);
 
 static REGION: AtomicU32 = AtomicU32::new(0);
 
@@ -117,6 +121,7 @@ pub fn run_all() {
     gyro_budgets();
     one_stage_budgets();
     receiver_budgets();
+    nav_budgets();
 }
 
 fn ekf_budgets() {
@@ -199,7 +204,7 @@ fn solve_once(
 fn resolve_once(
     resolver: &gnss_attitude::attitude::ambiguity::AmbiguityResolver<2>,
     phases: &gnss_attitude::attitude::ambiguity::PhaseObservations<2, 12>,
-) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::AmbiguityError> {
+) -> Result<gnss_attitude::attitude::ambiguity::AmbiguityFix<2, 12>, gnss_attitude::attitude::ambiguity::AmbiguityError> {
     resolver.resolve(phases)
 }
 
@@ -494,6 +499,8 @@ fn signal_budgets() {
             });
         }
     }
+    bitwise_budgets();
+    packing_budgets();
     // One tracking epoch: correlator + discriminators + loop filters + lock/C/N0 windows.
     let ch_cfg = ChannelConfig::new(SIGNAL_SELF_TEST_RATE_HZ, 0.0);
     if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::complex(0, i, q)) {
@@ -606,4 +613,237 @@ fn receiver_budgets() {
     });
     let att = r.attitude();
     hprintln!("receiver: source {:?}, error {} deg", att.source, att.q_rb.angle_to(&flight.attitude(att.epoch)) * 57.29578);
+}
+
+/// The bit-parallel correlator on the i8 correlator's case (3 antennas x 1 satellite, one 1 ms
+/// code period at 2.6 Msps, E/P/L+N on the reference antenna, prompt on the slaves), planes
+/// packed from the same samples before the region: 1- and 2-bit, complex and real IF, 2- and
+/// 3-level carrier.
+fn bitwise_budgets() {
+    let s = &SIGNAL_SAMPLES;
+    let cases = [
+        (Resolution::OneBit, true, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, true, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 2-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::OneBit, true, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, true, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 2-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::OneBit, false, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 1-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, false, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 2-bit, 2-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::OneBit, false, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 1-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+        (Resolution::TwoBit, false, CarrierLevels::Three, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps real IF 2-bit, 3-level carrier, E/P/L+N ref + P slaves"),
+    ];
+    for (resolution, complex, levels, name) in cases {
+        let format = PlaneFormat { resolution, complex };
+        let q = |k: usize| if complex { &s[3 + k][..] } else { &[][..] };
+        let (Ok(p0), Ok(p1), Ok(p2)) = (
+            pack_self_test(format, &s[0], q(0)),
+            pack_self_test(format, &s[1], q(1)),
+            pack_self_test(format, &s[2], q(2)),
+        ) else {
+            hprintln!("budget bitwise: packing failed");
+            continue;
+        };
+        let Ok(block) = BitBlock::new(0, &CODE_TABLE_2M6, [p0.planes(), p1.planes(), p2.planes()]) else {
+            hprintln!("budget bitwise: block refused");
+            continue;
+        };
+        let Ok(mut corr) = self_test_correlator(format, levels) else {
+            hprintln!("budget bitwise: correlator refused");
+            continue;
+        };
+        let out = measure(name, || {
+            let mut cursor = 0;
+            black_box(&mut corr).run(black_box(&block), &mut cursor)
+        });
+        if !matches!(out, Ok(Some(ref e)) if e.samples == 2600) {
+            hprintln!("budget bitwise: {} did not complete one code period: {:?}", name, out.map(|o| o.map(|e| e.samples)));
+        }
+    }
+    // LEO Doppler: the carrier words then hold up to two quadrant crossings each.
+    let format = PlaneFormat { resolution: Resolution::OneBit, complex: true };
+    if let (Ok(p0), Ok(p1), Ok(p2), Ok(mut corr)) = (
+        pack_self_test(format, &s[0], &s[3]),
+        pack_self_test(format, &s[1], &s[4]),
+        pack_self_test(format, &s[2], &s[5]),
+        self_test_correlator(format, CarrierLevels::Two),
+    ) {
+        if let (Ok(block), Ok(())) = (
+            BitBlock::new(0, &CODE_TABLE_2M6, [p0.planes(), p1.planes(), p2.planes()]),
+            corr.set_carrier_frequency(40_000.0),
+        ) {
+            let _ = measure("bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier at 40 kHz Doppler, E/P/L+N ref + P slaves", || {
+                let mut cursor = 0;
+                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+            });
+        }
+    }
+}
+
+/// Packing 1 ms (2600 sample instants) of front-end bytes of 3 antennas into bit planes: the
+/// DMA layouts a flight receiver hands over (sm2iq: two complex samples a byte per antenna;
+/// mc2x3: one byte per instant holding the three antennas' 2-bit real samples; bit1: eight
+/// real samples a byte per antenna).
+fn packing_budgets() {
+    let s = &SIGNAL_SAMPLES;
+    let field = |x: i8| (u8::from(x < 0) << 1) | u8::from(x.unsigned_abs() >= 18);
+    let mut sm2iq = [[0u8; 1300]; 3];
+    for (a, bytes) in sm2iq.iter_mut().enumerate() {
+        for (k, b) in bytes.iter_mut().enumerate() {
+            let (i0, q0, i1, q1) = (s[a][2 * k], s[a + 3][2 * k], s[a][2 * k + 1], s[a + 3][2 * k + 1]);
+            *b = (field(i0) << 6) | (field(q0) << 4) | (field(i1) << 2) | field(q1);
+        }
+    }
+    let mut mc2 = [0u8; 2600];
+    for (k, b) in mc2.iter_mut().enumerate() {
+        *b = field(s[0][k]) | (field(s[1][k]) << 2) | (field(s[2][k]) << 4);
+    }
+    let mut bit1 = [[0u8; 325]; 3];
+    for (a, bytes) in bit1.iter_mut().enumerate() {
+        for (k, b) in bytes.iter_mut().enumerate() {
+            for j in 0..8 {
+                *b |= u8::from(s[a][8 * k + j] < 0) << (7 - j);
+            }
+        }
+    }
+    let two_cx = PlaneFormat { resolution: Resolution::TwoBit, complex: true };
+    let one_cx = PlaneFormat { resolution: Resolution::OneBit, complex: true };
+    let two_re = PlaneFormat { resolution: Resolution::TwoBit, complex: false };
+    let one_re = PlaneFormat { resolution: Resolution::OneBit, complex: false };
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(two_cx), PlaneBuffer::new(two_cx), PlaneBuffer::new(two_cx)];
+    let n = measure("packing 1 ms sm2iq -> 2-bit complex planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&sm2iq)) {
+            n += b.pack_bytes(SampleFormat::SignMagnitude2 { complex: true }, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(one_cx), PlaneBuffer::new(one_cx), PlaneBuffer::new(one_cx)];
+    let n1 = measure("packing 1 ms sm2iq -> 1-bit complex planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&sm2iq)) {
+            n += b.pack_bytes(SampleFormat::SignMagnitude2 { complex: true }, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(two_re), PlaneBuffer::new(two_re), PlaneBuffer::new(two_re)];
+    let n2 = measure("packing 1 ms mc2x3 -> 2-bit real planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (c, b) in black_box(&mut bufs).iter_mut().enumerate() {
+            n += b.pack_bytes(SampleFormat::MultiChannel2 { channels: 3 }, black_box(&mc2[..]), c).unwrap_or(0);
+        }
+        n
+    });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(one_re), PlaneBuffer::new(one_re), PlaneBuffer::new(one_re)];
+    let n3 = measure("packing 1 ms bit1 -> 1-bit real planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&bit1)) {
+            n += b.pack_bytes(SampleFormat::Sign1, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
+    hprintln!("budget packing: samples packed {} {} {} {}", n, n1, n2, n3);
+}
+
+/// Navigation (`nav`, f64 soft-float on the M4F for times, ranges and orbits): one subframe
+/// decode, one satellite's position, a single-point fix from 8 satellites (LEO and ground
+/// configurations), the LEO filter and the lines of sight.
+fn nav_budgets() {
+    use gnss_attitude::nav::bits::DataBit;
+    use gnss_attitude::nav::example::{self, EXAMPLE_KLOBUCHAR};
+    use gnss_attitude::nav::geodesy::Geodetic;
+    use gnss_attitude::nav::{
+        line_of_sight, solve, GpsTime, NavigationStore, OrbitFilter, OrbitFilterConfig, ReferenceFrame,
+        SolverConfig, SubframeSync,
+    };
+    let ephs = example::constellation();
+    // subframes 1 and 2 of PRN 7 held, subframe 3 decoded bit by bit; the last bit completes it
+    let mut sync = SubframeSync::new();
+    let mut store = NavigationStore::default();
+    let mut epoch = 0u64;
+    let mut bit = |value: bool| {
+        epoch += 20;
+        DataBit { value, start_epoch: epoch, strength: 1.0 }
+    };
+    let _ = sync.push(&bit(false));
+    let _ = sync.push(&bit(false));
+    let mut last = None;
+    for id in 1..=3u8 {
+        let bits = example::subframe_bits(&example::subframe_words(&ephs[6], id, 39_600 + u32::from(id)));
+        for (k, &b) in bits.iter().enumerate() {
+            let d = bit(b);
+            if id == 3 && k == 299 {
+                last = Some(d);
+            } else if id == 3 && k == 150 {
+                let _ = measure("nav subframe sync, one bit inside a subframe (shift, preamble test)", || {
+                    black_box(&mut sync).push(black_box(&d)).is_ok()
+                });
+            } else if let Ok(Some(sf)) = sync.push(&d) {
+                let _ = store.add_subframe(7, &sf);
+            }
+        }
+    }
+    if let Some(d) = last {
+        let stored = measure("nav subframe decode: the bit completing subframe 3 (10-word parity) + store (fields, IODE/IODC, plausibility)", || {
+            match black_box(&mut sync).push(black_box(&d)) {
+                Ok(Some(sf)) => black_box(&mut store).add_subframe(7, &sf).is_ok(),
+                _ => false,
+            }
+        });
+        hprintln!("nav budgets: subframe decoded and ephemeris stored: {}", stored && store.ephemeris(7).is_some());
+    }
+    let Ok(at) = GpsTime::new(example::EXAMPLE_WEEK, 238_000.0) else { return };
+    let _ = measure("nav satellite position, velocity, clock of 1 satellite (f64 Kepler, user algorithm)", || {
+        black_box(&ephs[3]).satellite_state(black_box(&at)).is_ok()
+    });
+    // LEO: 550 km above Kyiv, 7.6 km/s
+    let leo = Geodetic { lat_rad: 0.8805, lon_rad: 0.5327, height_m: 550e3 }.to_ecef();
+    let v = [-3000.0, 2500.0, 6500.0];
+    let clock = 1000.0;
+    let Ok(rx_clock) = at.add_seconds(clock / 299_792_458.0) else { return };
+    let Ok(obs) = example::observations(&ephs, &leo, &v, clock, &at, 8, None) else { return };
+    let fix = measure("nav fix LEO, 8 satellites (orbits, LS f64 state/f32 normal eqs, Sagnac, DOP, velocity, residual check)", || {
+        solve(black_box(&obs[..]), black_box(&ephs[..]), None, black_box(&rx_clock), None, &SolverConfig::leo())
+    });
+    let prior = [leo[0] + 100.0, leo[1] - 60.0, leo[2] + 80.0];
+    let _ = measure("nav fix LEO, 8 satellites, started from a prediction 140 m off (the 1 Hz case)", || {
+        solve(black_box(&obs[..]), black_box(&ephs[..]), None, black_box(&rx_clock), Some(&prior), &SolverConfig::leo()).is_ok()
+    });
+    let ground = Geodetic { lat_rad: 0.8805, lon_rad: 0.5327, height_m: 180.0 }.to_ecef();
+    let iono = EXAMPLE_KLOBUCHAR;
+    if let Ok(gobs) = example::observations(&ephs, &ground, &[0.0; 3], clock, &at, 8, Some(&iono)) {
+        let g = measure("nav fix ground, 8 satellites (as LEO + Klobuchar + troposphere + 5 deg mask)", || {
+            solve(black_box(&gobs[..]), black_box(&ephs[..]), Some(&iono), black_box(&rx_clock), None, &SolverConfig::ground())
+        });
+        match g {
+            Ok(f) => hprintln!("nav budgets: ground fix {} sats, {} iterations, error {} m", f.satellites, f.iterations,
+                ((f.position_m[0] - ground[0]).powi(2) + (f.position_m[1] - ground[1]).powi(2) + (f.position_m[2] - ground[2]).powi(2)).sqrt()),
+            Err(e) => hprintln!("nav budgets: ground fix refused: {:?}", e),
+        }
+    }
+    let Ok(fix) = fix else {
+        hprintln!("nav budgets: LEO fix refused");
+        return;
+    };
+    hprintln!("nav budgets: LEO fix {} sats, {} iterations, pdop {}, error {} m", fix.satellites, fix.iterations, fix.dop.pdop,
+        ((fix.position_m[0] - leo[0]).powi(2) + (fix.position_m[1] - leo[1]).powi(2) + (fix.position_m[2] - leo[2]).powi(2)).sqrt());
+    let Ok(mut filter) = OrbitFilter::from_fix(&fix, OrbitFilterConfig::default()) else { return };
+    let Ok(next) = fix.time.add_seconds(1.0) else { return };
+    let _ = measure("nav LEO filter predict 1 s (RK4 2-body + J2 f64, 6x6 covariance f32)", || {
+        black_box(&mut filter).predict_to(black_box(&next)).is_ok()
+    });
+    let mut later = fix;
+    later.time = next;
+    let _ = measure("nav LEO filter update with a fix (6-D Joseph update, gate)", || {
+        black_box(&mut filter).update(black_box(&later)).is_ok()
+    });
+    let state = filter.state();
+    let frame = ReferenceFrame::Inertial { epoch: at };
+    let _ = measure("nav lines of sight + rates, 8 satellites, inertial frame (light time x3)", || {
+        let mut n = 0;
+        for o in black_box(&obs).iter() {
+            if let Some(e) = ephs.iter().find(|e| e.prn == o.prn) {
+                n += usize::from(line_of_sight(black_box(&state), e, &frame).is_ok());
+            }
+        }
+        n
+    });
 }

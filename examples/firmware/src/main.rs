@@ -60,6 +60,7 @@ fn main() -> ! {
     }
 
     all_passed &= signal_self_check();
+    all_passed &= bitwise_self_check();
 
     budget::run_all();
 
@@ -97,6 +98,43 @@ fn signal_self_check() -> bool {
         }
         other => {
             hprintln!("selfcheck correlator: FAIL {:?}", other.map(|o| o.is_some()));
+            false
+        }
+    }
+}
+
+/// The bit-parallel correlator on the target against the host's integers (must be equal).
+fn bitwise_self_check() -> bool {
+    use gnss_attitude::signal::bitwise::selftest::{pack_self_test, run_bit_correlator_self_test};
+    use gnss_attitude::signal::bitwise::{CarrierLevels, PlaneFormat, Resolution};
+    let s = &budget::SIGNAL_SAMPLES;
+    let format = PlaneFormat { resolution: Resolution::TwoBit, complex: true };
+    let (Ok(p0), Ok(p1), Ok(p2)) = (
+        pack_self_test(format, &s[0], &s[3]),
+        pack_self_test(format, &s[1], &s[4]),
+        pack_self_test(format, &s[2], &s[5]),
+    ) else {
+        hprintln!("selfcheck bit-parallel correlator: FAIL packing");
+        return false;
+    };
+    match run_bit_correlator_self_test(&budget::CODE_TABLE_2M6, [p0.planes(), p1.planes(), p2.planes()], CarrierLevels::Three) {
+        Ok(Some(e)) => {
+            let mut equal = e.samples == EXPECTED_SAMPLES;
+            for (t, x) in e.taps.iter().zip(EXPECTED_BIT_TAPS.iter()) {
+                let row = [t.early.i, t.early.q, t.prompt.i, t.prompt.q, t.late.i, t.late.q, t.noise.i, t.noise.q];
+                equal &= row == *x;
+            }
+            hprintln!(
+                "selfcheck bit-parallel correlator: {} ({} samples, 2-bit complex, 3-level carrier, taps bit-exact vs host; prompt I/Q of antenna 0: {} {})",
+                if equal { "PASS" } else { "FAIL" },
+                e.samples,
+                e.taps[0].prompt.i,
+                e.taps[0].prompt.q
+            );
+            equal
+        }
+        other => {
+            hprintln!("selfcheck bit-parallel correlator: FAIL {:?}", other.map(|o| o.is_some()));
             false
         }
     }

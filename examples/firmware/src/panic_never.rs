@@ -19,16 +19,14 @@ use gnss_attitude::attitude::dcm_filter::{DcmFilterConfig, DirectionCosineFilter
 use gnss_attitude::attitude::direction_cosine::{ColumnChoice, DirectionCosineModel};
 use gnss_attitude::attitude::multi_structure::{fuse, MultiStructureFilter};
 use gnss_attitude::attitude::rigid_body::{RigidBodyConfig, RigidBodyFilter};
+use gnss_attitude::linalg::singular_values;
 use gnss_attitude::gyro::{
-    lsq::singular_values, AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
+    AnchorErrorAndDrift, AttitudePropagator, CalibratorConfig,
     GyroCalibrator, LeastSquaresAccumulator, NormalEquations, PaperCalibrator, PulseDecoder,
     ResidualCentering, ScaleMisalignmentBias, SqrtInformation,
 };
-use gnss_attitude::attitude::one_stage::{
-    observation_from_epoch, satellite_terms, AdapterConfig, AntennaMapping, BesselRatio, EpochClock,
-    ObservationAdapter, PhaseDifferences, FilterMode, OneStageConfig, OneStageFilter, Prior,
-    SatelliteObservation, MAX_SATELLITES,
-};
+use gnss_attitude::attitude::one_stage::{satellite_terms, BesselRatio, PhaseDifferences, FilterMode, OneStageConfig, OneStageFilter, Prior, SatelliteObservation, MAX_SATELLITES};
+use gnss_attitude::receiver::{observation_from_epoch, AdapterConfig, AntennaMapping, EpochClock, ObservationAdapter};
 use gnss_attitude::frontend::nt1065::{Nt1065, Nt1065Config};
 use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
 use gnss_attitude::tracking::acquisition::detection_threshold;
@@ -75,6 +73,7 @@ fn main() -> ! {
     signal_chain();
     receiver();
     sample_receiver();
+    navigation();
     loop {
         cortex_m::asm::nop();
     }
@@ -411,10 +410,53 @@ fn signal_chain() {
     let _ = black_box(refine_frequency(&squares, black_box(1e-3)));
     let _ = black_box(refine_frequency_and_rate(&squares, black_box(1e-3), black_box(150.0)));
     let _ = black_box(detection_threshold(black_box(10), black_box(1e5), black_box(1e-3)));
+    bitwise(&cfg, prn);
     let mut fe = Nt1065::new(OpaqueSpi);
     let _ = black_box(fe.configure(&black_box(Nt1065Config::three_antenna_l1())));
     let _ = black_box(fe.wait_ready(&mut NoDelay, black_box(10)));
     let _ = black_box(fe.read_register(black_box(44)));
+}
+
+/// The bit-parallel correlator's code table (2.6 Msps), at compile time.
+static CODE_TABLE: gnss_attitude::signal::bitwise::CodeTable =
+    gnss_attitude::signal::bitwise::CodeTable::from_step((1.023e6 / 2.6e6 * 4_294_967_296.0 + 0.5) as u64);
+
+/// The bit-parallel correlator and the packers with opaque inputs (format and carrier levels
+/// opaque too, so every kernel variant is linked).
+#[inline(never)]
+fn bitwise(cfg: &CorrelatorConfig, prn: Prn) {
+    use gnss_attitude::signal::bitwise::{
+        BitBlock, BitCorrelator, BitCorrelatorConfig, CarrierLevels, PlaneBuffer, PlaneFormat, Resolution,
+    };
+    let raw: [u8; 96] = black_box([0x5a; 96]);
+    let format = PlaneFormat {
+        resolution: if black_box(true) { Resolution::TwoBit } else { Resolution::OneBit },
+        complex: black_box(true),
+    };
+    let mut bufs = [PlaneBuffer::<4>::new(format), PlaneBuffer::new(format), PlaneBuffer::new(format)];
+    for b in bufs.iter_mut() {
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::SignMagnitude2 { complex: true }), &raw, black_box(0)));
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::MultiChannel2 { channels: 3 }), &raw, black_box(1)));
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::Sign1), &raw, black_box(0)));
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::SignMagnitude2 { complex: false }), &raw, black_box(0)));
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::Cs8), &raw, black_box(0)));
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::Int8), &raw, black_box(0)));
+        let si: [i8; 100] = black_box([3; 100]);
+        let _ = black_box(b.pack_i8(&si, &si, black_box(2)));
+    }
+    let levels = if black_box(true) { CarrierLevels::Three } else { CarrierLevels::Two };
+    let config = BitCorrelatorConfig { correlator: *cfg, format, carrier: levels };
+    if let (Ok(block), Ok(mut c)) = (
+        BitBlock::new(black_box(0), &CODE_TABLE, [bufs[0].planes(), bufs[1].planes(), bufs[2].planes()]),
+        BitCorrelator::<3>::new(prn, &config),
+    ) {
+        let _ = c.set_carrier_frequency(black_box(1000.0));
+        let _ = c.set_code_rate(black_box(1.023e6));
+        let _ = c.set_code_phase(black_box(3.0));
+        let _ = c.set_carrier_phase(black_box(0.1));
+        let mut cursor = black_box(0);
+        let _ = black_box(c.run(&block, &mut cursor));
+    }
 }
 
 /// The attitude receiver's entry points with opaque inputs.
@@ -490,6 +532,49 @@ fn sample_receiver() {
     }
     let _ = black_box(rx.attitude());
     let _ = black_box(rx.release(prn));
+}
+
+/// Navigation: the channel decoder, the store, the fix, the LEO filter, the lines of sight.
+#[inline(never)]
+fn navigation() {
+    use gnss_attitude::nav::bits::BitSyncConfig;
+    use gnss_attitude::nav::example;
+    use gnss_attitude::nav::{
+        line_of_sight, solve, ChannelDecoder, GpsTime, NavigationStore, Observation, OrbitFilter,
+        OrbitFilterConfig, ReferenceFrame, SolverConfig,
+    };
+    let mut dec = ChannelDecoder::new(black_box(5), BitSyncConfig::default());
+    let mut store = NavigationStore::default();
+    for k in 0..black_box(4000u64) {
+        if let Ok(Some(sf)) = dec.push_prompt(black_box(k), black_box(1.0)) {
+            let _ = black_box(store.add_subframe(black_box(5), &sf));
+        }
+        if let Err(gnss_attitude::nav::decoder::DecodeError::Subframe(e)) = dec.push_prompt(black_box(k), black_box(-1.0)) {
+            store.record_decode_error(&e);
+        }
+    }
+    let _ = black_box(dec.transmit_time(black_box(5000), black_box(100.0)));
+    let ephs = black_box(example::constellation());
+    let t = GpsTime { week: black_box(2195), tow_s: black_box(238_000.0) };
+    let obs: [Observation; 8] = core::array::from_fn(|i| Observation {
+        prn: black_box(i as u8 + 1),
+        transmit: t,
+        pseudorange_m: black_box(2.1e7),
+        doppler_hz: Some(black_box(100.0)),
+        sigma_m: black_box(3.0),
+    });
+    let iono = example::EXAMPLE_KLOBUCHAR;
+    if let Ok(fix) = solve(&obs, &ephs[..], Some(&iono), &t, None, &black_box(SolverConfig::ground())) {
+        if let Ok(mut f) = OrbitFilter::from_fix(&fix, OrbitFilterConfig::default()) {
+            let _ = black_box(f.predict_to(&black_box(t)));
+            let _ = black_box(f.update(&fix));
+            for e in ephs.iter() {
+                let _ = black_box(line_of_sight(&f.state(), e, &ReferenceFrame::LocalNed));
+                let _ = black_box(line_of_sight(&f.state(), e, &ReferenceFrame::Inertial { epoch: t }));
+            }
+        }
+    }
+    let _ = black_box(solve(&obs, &store, None, &t, None, &black_box(SolverConfig::leo())));
 }
 
 #[panic_handler]

@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::format::{interleave, FileFormat};
 use super::reader::{Recording, RecordingSpec};
-use crate::scenarios::signal::triangle;
+use crate::arrays::triangle;
 use crate::synth::file::extension;
 use crate::synth::quantize::encode;
 use crate::synth::scene::SUB_BLOCK;

@@ -1,15 +1,17 @@
-//! Output of the scenarios: the human summary, progress bars, CSV time series and PNG plots.
+//! Output of the scenarios: the human summary, progress bars, CSV time series, PNG plots, and
+//! the Markdown of `docs/RESULTS.md` ([`markdown`]).
 
 mod csv_out;
+pub mod markdown;
 mod plot;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::Value;
 
-use crate::scenarios::Outcome;
+use crate::outcome::Outcome;
 
 pub use csv_out::write_csv;
-pub use plot::{plot_lines, plot_panels, Panel, Series};
+pub use plot::{palette, plot_lines, plot_panels, Dash, Panel, Series};
 
 /// A progress bar on stderr for `len` steps. indicatif hides it when stderr is not a terminal,
 /// so it never pollutes `--json` output or CI logs.

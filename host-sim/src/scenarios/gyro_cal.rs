@@ -31,63 +31,65 @@ use gnss_attitude::Real;
 use nalgebra::SVector;
 use serde_json::{json, Value};
 
-use super::{Outcome, RunContext, Scenario, Variant};
+use super::{Outcome, RunContext, Scenario, Variant, Variants};
 use crate::report::{plot_lines, write_csv, Series};
 use crate::truth::gyro::section6::{self, Truth, FIRST_EPOCH, H_SAMPLE, SIGMA};
+
+/// What a variant runs.
+#[derive(Clone, Copy, Debug)]
+pub enum Plan {
+    /// The paper's §6 experiment, the gyro read as given.
+    Section6(Input),
+    /// The tumbling microsatellite against a GNSS reference ([`super::gyro_cal_gnss`]).
+    GnssReference,
+}
 
 /// The scenario.
 pub const SCENARIO: Scenario = Scenario {
     name: "gyro-cal",
     about: "Gyro calibration by sequential least squares against a reference attitude (paper 001)",
-    variants: &[
-        Variant {
-            name: "exact",
-            about: "§6: float increments, no quantization",
+    variants: &Variants {
+        list: &[
+            Variant::new(
+                "exact",
+                "§6: float increments, no quantization",
+                Plan::Section6(Input::Exact),
+            ),
+            Variant::new(
+                "quantized",
+                "§6: pulses of σ = 2e-5 rad, no centering",
+                Plan::Section6(Input::Pulses(ResidualCentering::None)),
+            ),
+            Variant::new(
+                "centered-5.5",
+                "§6: pulses, residual centered in the equations, eq. (5.5)",
+                Plan::Section6(Input::Pulses(ResidualCentering::MeanResidual)),
+            ),
+            Variant::new(
+                "centered-5.6",
+                "§6: pulses, increments centered before integration, eq. (5.6)",
+                Plan::Section6(Input::Pulses(ResidualCentering::IncrementCorrection)),
+            ),
+            Variant::new(
+                "gnss-ref",
+                "tumbling microsatellite, MEMS gyro, 0.05° GNSS attitude at 10 Hz, 10 min",
+                Plan::GnssReference,
+            ),
+        ],
+        run: |plan, ctx| match *plan {
+            Plan::Section6(input) => run_section6(ctx, input),
+            Plan::GnssReference => super::gyro_cal_gnss::run(ctx),
         },
-        Variant {
-            name: "quantized",
-            about: "§6: pulses of σ = 2e-5 rad, no centering",
-        },
-        Variant {
-            name: "centered-5.5",
-            about: "§6: pulses, residual centered in the equations, eq. (5.5)",
-        },
-        Variant {
-            name: "centered-5.6",
-            about: "§6: pulses, increments centered before integration, eq. (5.6)",
-        },
-        Variant {
-            name: "gnss-ref",
-            about: "tumbling microsatellite, MEMS gyro, 0.05° GNSS attitude at 10 Hz, 10 min",
-        },
-    ],
-    run,
+    },
 };
-
-fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
-    match ctx.variant.as_str() {
-        "gnss-ref" => super::gyro_cal_gnss::run(ctx),
-        v => run_section6(ctx, Input::from_variant(v)?),
-    }
-}
 
 /// How the §6 gyro is read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Input {
+pub enum Input {
+    /// Float increments.
     Exact,
+    /// Quantized pulses, with this residual centering.
     Pulses(ResidualCentering),
-}
-
-impl Input {
-    fn from_variant(v: &str) -> anyhow::Result<Self> {
-        Ok(match v {
-            "exact" => Self::Exact,
-            "quantized" => Self::Pulses(ResidualCentering::None),
-            "centered-5.5" => Self::Pulses(ResidualCentering::MeanResidual),
-            "centered-5.6" => Self::Pulses(ResidualCentering::IncrementCorrection),
-            other => anyhow::bail!("unknown variant {other}"),
-        })
-    }
 }
 
 pub(crate) fn c<T: Real>(v: f64) -> T {
@@ -288,97 +290,185 @@ fn paper_figures(input: Input) -> Value {
     })
 }
 
-fn run_section6(ctx: &RunContext, input: Input) -> anyhow::Result<Outcome> {
-    let truth = section6::generate();
-    let (cal32, epochs) = run_core::<f32>(&truth, input)?;
-    let (cal64, _) = run_core::<f64>(&truth, input)?;
-    let tol32 = cal32.config().rank_tolerance;
-    let givens32 = cal32.solve()?.solution;
-    let normal32 = solve_with(NormalEquations::<15, f32>::new(), &epochs, tol32)?;
-    let givens64 = solve_with(SqrtInformation::<15, f64>::new(), &epochs, 1e-8)?;
-    let pipeline64 = cal64.solve()?.solution;
+crate::metrics! {
+    /// Metrics of the §6 variants of `gyro-cal` (errors are estimate − truth).
+    pub struct Section6Metrics {
+        /// Error of the gyro parameters c₁…₉ (scale factors, misalignments, biases), f32 Givens.
+        #[metric(unit = "1, 1, 1, rad, rad, rad, 1/s, 1/s, 1/s")] pub dc: Vec<f64>,
+        /// Error of the reference drift d.
+        #[metric(unit = "1/s")] pub dd: Vec<f64>,
+        /// Post-correction attitude error (half-angle vector).
+        #[metric(unit = "")] pub w_post: Vec<f64>,
+        /// Rank of the f32 Givens solve.
+        #[metric(unit = "")] pub rank: usize,
+        /// Condition number of the f32 Givens solve.
+        #[metric(unit = "")] pub cond: f64,
+        /// c error of the f64 solve of the same equations.
+        #[metric(unit = "as dc")] pub dc_f64: Vec<f64>,
+        /// d error of the f64 solve.
+        #[metric(unit = "1/s")] pub dd_f64: Vec<f64>,
+        /// Attitude error of the f64 solve.
+        #[metric(unit = "")] pub w_post_f64: Vec<f64>,
+        /// Largest over the groups (c₁…₆, c₇…₉, d, w_post) of ‖f32 Givens − f64‖ / ‖f64 − truth‖.
+        #[metric(unit = "")] pub givens_f32_dev_ratio: f64,
+        /// The same for the f32 normal equations (the paper's eq. (5.8)).
+        #[metric(unit = "")] pub normal_f32_dev_ratio: f64,
+        /// c error of the f32 normal equations.
+        #[metric(unit = "as dc")] pub dc_normal_f32: Vec<f64>,
+        /// d error of the f32 normal equations.
+        #[metric(unit = "1/s")] pub dd_normal_f32: Vec<f64>,
+        /// Attitude error of the f32 normal equations.
+        #[metric(unit = "")] pub w_post_normal_f32: Vec<f64>,
+        /// Rank of the f32 normal equations.
+        #[metric(unit = "")] pub rank_normal_f32: usize,
+        /// Condition number of the f32 normal equations.
+        #[metric(unit = "")] pub cond_normal_f32: f64,
+        /// c error of the whole pipeline run in f64.
+        #[metric(unit = "as dc")] pub dc_f64_pipeline: Vec<f64>,
+        /// d error of the f64 pipeline.
+        #[metric(unit = "1/s")] pub dd_f64_pipeline: Vec<f64>,
+        /// Attitude error of the f64 pipeline.
+        #[metric(unit = "")] pub w_post_f64_pipeline: Vec<f64>,
+        /// Formal standard deviations of c (f32 Givens).
+        #[metric(unit = "as dc")] pub c_std: Vec<f64>,
+        /// Formal standard deviations of d.
+        #[metric(unit = "1/s")] pub d_std: Vec<f64>,
+        /// Unit-weight standard deviation of the fit.
+        #[metric(unit = "")] pub sigma0: f64,
+        /// Singular values of the equilibrated design.
+        #[metric(unit = "")] pub singular_values: Vec<f64>,
+        /// Reference epochs whose equations were used.
+        #[metric(unit = "")] pub epochs_used: u32,
+        /// Reference epochs skipped (small p₀ or gimbal lock).
+        #[metric(unit = "")] pub epochs_skipped: u32,
+        /// Equation rows accumulated.
+        #[metric(unit = "")] pub rows: u32,
+    }
+}
 
-    let e32 = errors(&cal32, &givens32, &truth);
-    let ene = errors(&cal32, &normal32, &truth);
-    let e64 = errors(&cal32, &solution_as::<f32, f64>(&givens64), &truth);
-    let epipe = errors(&cal64, &pipeline64, &truth);
-    let givens_ratio = deviation_ratio(&e32, &e64);
-    let normal_ratio = deviation_ratio(&ene, &e64);
+/// Rank tolerance of the f64 reference solve.
+const F64_RANK_TOLERANCE: f64 = 1e-8;
 
-    let mut outcome = Outcome::default();
-    outcome
-        .metric("dc", e32.dc.to_vec())
-        .metric("dd", e32.dd.to_vec())
-        .metric("w_post", e32.w_post.to_vec())
-        .metric("rank", e32.rank)
-        .metric("cond", e32.cond)
-        .metric("dc_f64", e64.dc.to_vec())
-        .metric("dd_f64", e64.dd.to_vec())
-        .metric("w_post_f64", e64.w_post.to_vec())
-        .metric("givens_f32_dev_ratio", givens_ratio)
-        .metric("normal_f32_dev_ratio", normal_ratio)
-        .metric("dc_normal_f32", ene.dc.to_vec())
-        .metric("dd_normal_f32", ene.dd.to_vec())
-        .metric("w_post_normal_f32", ene.w_post.to_vec())
-        .metric("rank_normal_f32", ene.rank)
-        .metric("cond_normal_f32", ene.cond)
-        .metric("dc_f64_pipeline", epipe.dc.to_vec())
-        .metric("dd_f64_pipeline", epipe.dd.to_vec())
-        .metric("w_post_f64_pipeline", epipe.w_post.to_vec())
-        .metric("c_std", e32.std.as_slice()[3..12].to_vec())
-        .metric("d_std", e32.std.as_slice()[12..].to_vec())
-        .metric("sigma0", to_f64(givens32.sigma0))
-        .metric("singular_values", e32.singular_values.clone())
-        .metric("epochs_used", cal32.counters().used)
-        .metric(
-            "epochs_skipped",
-            cal32.counters().skipped_small_p0 + cal32.counters().skipped_gimbal_lock,
-        )
-        .metric("rows", givens32.rows);
-    outcome.paper = paper_figures(input);
-    let fmt = |v: &[f64]| {
-        v.iter()
-            .map(|a| format!("{a:+.1e}"))
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    outcome.summary = vec![
-        format!(
-            "paper 001 §6, variant {}: {} epochs, {} rows, rank {}, cond {:.0} (singular values {:.1} … {:.3})",
-            ctx.variant,
-            cal32.counters().used,
-            givens32.rows,
-            e32.rank,
-            e32.cond,
-            e32.singular_values.first().copied().unwrap_or(f64::NAN),
-            e32.singular_values.last().copied().unwrap_or(f64::NAN)
-        ),
-        format!("f32 Givens  δc1..6 {}", fmt(&e32.dc[..6])),
-        format!("            δc7..9 {}  δd {}", fmt(&e32.dc[6..]), fmt(&e32.dd)),
-        format!("            w° {}", fmt(&e32.w_post)),
-        format!("f64 solve   δc {}  δd {}", fmt(&e64.dc), fmt(&e64.dd)),
-        format!(
-            "f32 vs f64 (largest group ‖Δ‖/‖error‖): Givens {givens_ratio:.2e}, normal equations {normal_ratio:.2e}"
-        ),
-        format!(
-            "all-f64 pipeline: δc7..9 {}  δd {}  w° {}",
-            fmt(&epipe.dc[6..]),
-            fmt(&epipe.dd),
-            fmt(&epipe.w_post)
-        ),
-    ];
+/// The §6 solves: the f32 calibrator's Givens solve, the f32 normal equations and an f64
+/// Givens solve of the same equations, and the whole pipeline in f64, each against the truth.
+struct Solves {
+    cal32: Cal<f32>,
+    epochs: Vec<Epoch>,
+    givens32: LsqSolution<15, f32>,
+    e32: Errors,
+    ene: Errors,
+    e64: Errors,
+    epipe: Errors,
+}
 
-    if let Some(dir) = &ctx.out_dir {
-        // post-fit residuals of the f32 Givens estimate, per epoch
-        let x = e32.x;
-        let rows: Vec<[f64; 5]> = epochs
+impl Solves {
+    fn run(input: Input) -> anyhow::Result<Self> {
+        let truth = section6::generate();
+        let (cal32, epochs) = run_core::<f32>(&truth, input)?;
+        let (cal64, _) = run_core::<f64>(&truth, input)?;
+        let tol32 = cal32.config().rank_tolerance;
+        let givens32 = cal32.solve()?.solution;
+        let normal32 = solve_with(NormalEquations::<15, f32>::new(), &epochs, tol32)?;
+        let givens64 = solve_with(
+            SqrtInformation::<15, f64>::new(),
+            &epochs,
+            F64_RANK_TOLERANCE,
+        )?;
+        let pipeline64 = cal64.solve()?.solution;
+        Ok(Self {
+            e32: errors(&cal32, &givens32, &truth),
+            ene: errors(&cal32, &normal32, &truth),
+            e64: errors(&cal32, &solution_as::<f32, f64>(&givens64), &truth),
+            epipe: errors(&cal64, &pipeline64, &truth),
+            cal32,
+            epochs,
+            givens32,
+        })
+    }
+
+    fn metrics(&self) -> Section6Metrics {
+        let (e32, ene, e64, epipe) = (&self.e32, &self.ene, &self.e64, &self.epipe);
+        let counters = self.cal32.counters();
+        Section6Metrics {
+            dc: e32.dc.to_vec(),
+            dd: e32.dd.to_vec(),
+            w_post: e32.w_post.to_vec(),
+            rank: e32.rank,
+            cond: e32.cond,
+            dc_f64: e64.dc.to_vec(),
+            dd_f64: e64.dd.to_vec(),
+            w_post_f64: e64.w_post.to_vec(),
+            givens_f32_dev_ratio: deviation_ratio(e32, e64),
+            normal_f32_dev_ratio: deviation_ratio(ene, e64),
+            dc_normal_f32: ene.dc.to_vec(),
+            dd_normal_f32: ene.dd.to_vec(),
+            w_post_normal_f32: ene.w_post.to_vec(),
+            rank_normal_f32: ene.rank,
+            cond_normal_f32: ene.cond,
+            dc_f64_pipeline: epipe.dc.to_vec(),
+            dd_f64_pipeline: epipe.dd.to_vec(),
+            w_post_f64_pipeline: epipe.w_post.to_vec(),
+            c_std: e32.std.as_slice()[3..12].to_vec(),
+            d_std: e32.std.as_slice()[12..].to_vec(),
+            sigma0: to_f64(self.givens32.sigma0),
+            singular_values: e32.singular_values.clone(),
+            epochs_used: counters.used,
+            epochs_skipped: counters.skipped_small_p0 + counters.skipped_gimbal_lock,
+            rows: self.givens32.rows,
+        }
+    }
+
+    fn summary(&self, variant: &str, m: &Section6Metrics) -> Vec<String> {
+        let (e32, e64, epipe) = (&self.e32, &self.e64, &self.epipe);
+        let fmt = |v: &[f64]| {
+            v.iter()
+                .map(|a| format!("{a:+.1e}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        vec![
+            format!(
+                "paper 001 §6, variant {variant}: {} epochs, {} rows, rank {}, cond {:.0} (singular values {:.1} … {:.3})",
+                m.epochs_used,
+                m.rows,
+                e32.rank,
+                e32.cond,
+                e32.singular_values.first().copied().unwrap_or(f64::NAN),
+                e32.singular_values.last().copied().unwrap_or(f64::NAN)
+            ),
+            format!("f32 Givens  δc1..6 {}", fmt(&e32.dc[..6])),
+            format!("            δc7..9 {}  δd {}", fmt(&e32.dc[6..]), fmt(&e32.dd)),
+            format!("            w° {}", fmt(&e32.w_post)),
+            format!("f64 solve   δc {}  δd {}", fmt(&e64.dc), fmt(&e64.dd)),
+            format!(
+                "f32 vs f64 (largest group ‖Δ‖/‖error‖): Givens {:.2e}, normal equations {:.2e}",
+                m.givens_f32_dev_ratio, m.normal_f32_dev_ratio
+            ),
+            format!(
+                "all-f64 pipeline: δc7..9 {}  δd {}  w° {}",
+                fmt(&epipe.dc[6..]),
+                fmt(&epipe.dd),
+                fmt(&epipe.w_post)
+            ),
+        ]
+    }
+
+    /// Post-fit residuals of the f32 Givens estimate per epoch, as CSV and plot.
+    fn write_files(
+        &self,
+        dir: &std::path::Path,
+        variant: &str,
+    ) -> anyhow::Result<Vec<std::path::PathBuf>> {
+        let x = self.e32.x;
+        let rows: Vec<[f64; 5]> = self
+            .epochs
             .iter()
             .map(|e| {
                 let r = e.eq.rhs - e.eq.rows * x;
                 [e.t, e.eq.p0, r.x, r.y, r.z]
             })
             .collect();
-        let stem = format!("gyro_cal_{}", ctx.variant.replace('.', "_"));
+        let stem = format!("gyro_cal_{}", variant.replace('.', "_"));
         let csv = dir.join(format!("{stem}_residuals.csv"));
         write_csv(
             &csv,
@@ -397,12 +487,23 @@ fn run_section6(ctx: &RunContext, input: Input) -> anyhow::Result<Outcome> {
             .collect();
         plot_lines(
             &png,
-            &format!("gyro-cal {}: post-fit residuals z − U x̂", ctx.variant),
+            &format!("gyro-cal {variant}: post-fit residuals z − U x̂"),
             "time (s)",
             "residual (quaternion units)",
             series,
         )?;
-        outcome.files = vec![csv, png];
+        Ok(vec![csv, png])
+    }
+}
+
+fn run_section6(ctx: &RunContext, input: Input) -> anyhow::Result<Outcome> {
+    let solves = Solves::run(input)?;
+    let m = solves.metrics();
+    let mut outcome = Outcome::new(&m)?;
+    outcome.paper = paper_figures(input);
+    outcome.summary = solves.summary(&ctx.variant, &m);
+    if let Some(dir) = &ctx.out_dir {
+        outcome.files = solves.write_files(dir, &ctx.variant)?;
     }
     Ok(outcome)
 }

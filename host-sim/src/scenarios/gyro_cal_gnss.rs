@@ -29,10 +29,10 @@ use gnss_attitude::gyro::{
 use gnss_attitude::Real;
 use nalgebra::{SVector, Vector3};
 use rayon::prelude::*;
-use serde_json::Value;
 
 use super::gyro_cal::{c, quat, quat64, to_f64};
 use super::{Outcome, RunContext};
+use crate::outcome::Suffixed;
 use crate::report::{plot_panels, progress, write_csv, Panel, Series};
 use crate::stats;
 use crate::truth::gyro::paper_d;
@@ -235,21 +235,80 @@ fn one_run(seed: u64, run: usize, random_walks: bool) -> anyhow::Result<RunOutpu
 /// rad/s to °/h.
 const DEG_PER_H: f64 = 180.0 / std::f64::consts::PI * 3600.0;
 
-/// Monte Carlo figures of one set of runs.
-struct Summary {
-    dc_rms: Vec<f64>,
-    dd_rms: Vec<f64>,
-    c_std_mean: Vec<f64>,
-    scale_ppm: f64,
-    misalign_urad: f64,
-    bias_deg_h: f64,
-    drift_deg_h: f64,
-    rate_raw: f64,
-    rate_cal: f64,
-    coast_raw: f64,
-    coast_cal: f64,
-    w_post: f64,
-    f32_vs_f64: f64,
+crate::metrics! {
+    /// Monte Carlo figures of one set of runs (RMS over the runs unless named otherwise).
+    pub struct Summary {
+        /// RMS error of c₁…₉ per parameter.
+        #[metric(unit = "1, 1, 1, rad, rad, rad, rad/s, rad/s, rad/s", rename = "dc_rms_mc")] pub dc_rms: Vec<f64>,
+        /// RMS of the estimated drift d per axis.
+        #[metric(unit = "rad/s", rename = "dd_rms_mc")] pub dd_rms: Vec<f64>,
+        /// Mean formal standard deviation of c₁…₉.
+        #[metric(unit = "as dc_rms_mc", rename = "c_std_mean_mc")] pub c_std_mean: Vec<f64>,
+        /// Scale-factor error.
+        #[metric(unit = "ppm", rename = "scale_err_ppm_rms")] pub scale_ppm: f64,
+        /// Misalignment error.
+        #[metric(unit = "µrad", rename = "misalignment_err_urad_rms")] pub misalign_urad: f64,
+        /// Bias error.
+        #[metric(unit = "°/h", rename = "bias_err_deg_per_h_rms")] pub bias_deg_h: f64,
+        /// Drift error.
+        #[metric(unit = "°/h", rename = "drift_err_deg_per_h_rms")] pub drift_deg_h: f64,
+        /// Rate error along the motion without calibration.
+        #[metric(unit = "°/h", rename = "rate_err_deg_per_h_raw_rms")] pub rate_raw: f64,
+        /// Rate error along the motion after calibration.
+        #[metric(unit = "°/h", rename = "rate_err_deg_per_h_calibrated_rms")] pub rate_cal: f64,
+        /// Attitude error after a 60 s coast on the raw gyro.
+        #[metric(unit = "deg", rename = "coast60_err_deg_raw_rms")] pub coast_raw: f64,
+        /// Attitude error after a 60 s coast on the calibrated gyro.
+        #[metric(unit = "deg", rename = "coast60_err_deg_calibrated_rms")] pub coast_cal: f64,
+        /// Attitude error at the end of the calibration span.
+        #[metric(unit = "rad", rename = "w_post_rms")] pub w_post: f64,
+        /// Largest over the runs of max|ĉ₃₂ − ĉ₆₄| / max|ĉ₆₄ − c|.
+        #[metric(unit = "", rename = "f32_vs_f64_over_error_max")] pub f32_vs_f64: f64,
+    }
+}
+
+crate::metrics! {
+    /// Metrics of `gyro-cal --variant gnss-ref` (run 0 unless named `_mc` or `_rms`).
+    pub struct Metrics {
+        /// Error of c₁…₉ (scale factors, misalignments, biases), f32.
+        #[metric(unit = "1, 1, 1, rad, rad, rad, rad/s, rad/s, rad/s")] pub dc: Vec<f64>,
+        /// Estimated drift d of the reference.
+        #[metric(unit = "rad/s")] pub dd: Vec<f64>,
+        /// Attitude error at the end of the span (half-angle vector).
+        #[metric(unit = "")] pub w_post: Vec<f64>,
+        /// Rank of the last solve.
+        #[metric(unit = "")] pub rank: usize,
+        /// Condition number of the last solve.
+        #[metric(unit = "")] pub cond: f64,
+        /// Condition number after equilibration.
+        #[metric(unit = "")] pub cond_equilibrated: f64,
+        /// c error of the f64 run.
+        #[metric(unit = "as dc")] pub dc_f64: Vec<f64>,
+        /// d of the f64 run.
+        #[metric(unit = "rad/s")] pub dd_f64: Vec<f64>,
+        /// Attitude error of the f64 run.
+        #[metric(unit = "")] pub w_post_f64: Vec<f64>,
+        /// True c averaged over the span (the biases walk).
+        #[metric(unit = "as dc")] pub c_true_mean: Vec<f64>,
+        /// Formal standard deviations of c.
+        #[metric(unit = "as dc")] pub c_std: Vec<f64>,
+        /// Formal standard deviations of d.
+        #[metric(unit = "rad/s")] pub d_std: Vec<f64>,
+        /// Monte Carlo runs.
+        #[metric(unit = "")] pub runs: usize,
+        /// The Monte Carlo with the MEMS random walks.
+        #[metric(flatten)] #[serde(flatten)] pub mc: Summary,
+        /// The Monte Carlo without the angle and bias random walks.
+        #[metric(suffixed = "_no_random_walk")] #[serde(flatten)] pub mc_no_random_walk: Suffixed<Summary>,
+        /// Solves over the span (one per re-linearization).
+        #[metric(unit = "")] pub solves: usize,
+        /// Interval between re-linearizations.
+        #[metric(unit = "s")] pub relinearize_s: f64,
+        /// Reference epochs used.
+        #[metric(unit = "")] pub epochs_used: u32,
+        /// Reference epochs skipped.
+        #[metric(unit = "")] pub epochs_skipped: u32,
+    }
 }
 
 impl Summary {
@@ -289,8 +348,8 @@ impl Summary {
     }
 }
 
-fn vec(v: impl IntoIterator<Item = f64>) -> Value {
-    Value::from(v.into_iter().collect::<Vec<f64>>())
+fn vec(v: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    v.into_iter().collect()
 }
 
 pub(crate) fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
@@ -309,57 +368,46 @@ pub(crate) fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
     let quiet = mc(false)?;
     bar.finish_and_clear();
     let r0 = &runs[0];
-    let all = Summary::of(&runs);
-    let rwfree = Summary::of(&quiet);
-    let deg_h = DEG_PER_H;
-    let mut outcome = Outcome::default();
-    outcome
-        .metric("dc", vec((r0.r32.c - r0.truth_c).iter().copied()))
-        .metric("dd", vec(r0.r32.d.iter().copied()))
-        .metric("w_post", vec(r0.r32.w_post.iter().copied()))
-        .metric("rank", r0.r32.rank)
-        .metric("cond", r0.r32.cond)
-        .metric("cond_equilibrated", r0.r32.cond_equilibrated)
-        .metric("dc_f64", vec((r0.r64.c - r0.truth_c).iter().copied()))
-        .metric("dd_f64", vec(r0.r64.d.iter().copied()))
-        .metric("w_post_f64", vec(r0.r64.w_post.iter().copied()))
-        .metric("c_true_mean", vec(r0.truth_c.iter().copied()))
-        .metric("c_std", vec(r0.r32.c_std.iter().copied()))
-        .metric("d_std", vec(r0.r32.d_std.iter().copied()))
-        .metric("runs", RUNS);
-    for (suffix, s) in [("", &all), ("_no_random_walk", &rwfree)] {
-        outcome
-            .metric(&format!("dc_rms_mc{suffix}"), s.dc_rms.clone())
-            .metric(&format!("dd_rms_mc{suffix}"), s.dd_rms.clone())
-            .metric(&format!("c_std_mean_mc{suffix}"), s.c_std_mean.clone())
-            .metric(&format!("scale_err_ppm_rms{suffix}"), s.scale_ppm)
-            .metric(
-                &format!("misalignment_err_urad_rms{suffix}"),
-                s.misalign_urad,
-            )
-            .metric(&format!("bias_err_deg_per_h_rms{suffix}"), s.bias_deg_h)
-            .metric(&format!("drift_err_deg_per_h_rms{suffix}"), s.drift_deg_h)
-            .metric(&format!("rate_err_deg_per_h_raw_rms{suffix}"), s.rate_raw)
-            .metric(
-                &format!("rate_err_deg_per_h_calibrated_rms{suffix}"),
-                s.rate_cal,
-            )
-            .metric(&format!("coast60_err_deg_raw_rms{suffix}"), s.coast_raw)
-            .metric(
-                &format!("coast60_err_deg_calibrated_rms{suffix}"),
-                s.coast_cal,
-            )
-            .metric(&format!("w_post_rms{suffix}"), s.w_post)
-            .metric(&format!("f32_vs_f64_over_error_max{suffix}"), s.f32_vs_f64);
+    let m = metrics(r0, Summary::of(&runs), Summary::of(&quiet));
+    let mut outcome = Outcome::new(&m)?;
+    outcome.summary = summary(r0, &m);
+    if let Some(dir) = &ctx.out_dir {
+        outcome.files = write_files(dir, r0)?;
     }
-    outcome
-        .metric("solves", r0.r32.history.len())
-        .metric("relinearize_s", RELINEARIZE_S)
-        .metric("epochs_used", r0.r32.epochs_used)
-        .metric("epochs_skipped", r0.r32.epochs_skipped);
-    outcome.paper = Value::Null;
+    Ok(outcome)
+}
+
+fn metrics(r0: &RunOutput, all: Summary, rwfree: Summary) -> Metrics {
+    Metrics {
+        dc: vec((r0.r32.c - r0.truth_c).iter().copied()),
+        dd: vec(r0.r32.d.iter().copied()),
+        w_post: vec(r0.r32.w_post.iter().copied()),
+        rank: r0.r32.rank,
+        cond: r0.r32.cond,
+        cond_equilibrated: r0.r32.cond_equilibrated,
+        dc_f64: vec((r0.r64.c - r0.truth_c).iter().copied()),
+        dd_f64: vec(r0.r64.d.iter().copied()),
+        w_post_f64: vec(r0.r64.w_post.iter().copied()),
+        c_true_mean: vec(r0.truth_c.iter().copied()),
+        c_std: vec(r0.r32.c_std.iter().copied()),
+        d_std: vec(r0.r32.d_std.iter().copied()),
+        runs: RUNS,
+        mc: all,
+        mc_no_random_walk: Suffixed {
+            suffix: "_no_random_walk",
+            inner: rwfree,
+        },
+        solves: r0.r32.history.len(),
+        relinearize_s: RELINEARIZE_S,
+        epochs_used: r0.r32.epochs_used,
+        epochs_skipped: r0.r32.epochs_skipped,
+    }
+}
+
+fn summary(r0: &RunOutput, m: &Metrics) -> Vec<String> {
+    let deg_h = DEG_PER_H;
     let c = c_true();
-    outcome.summary = vec![
+    let mut lines = vec![
         format!(
             "tumbling microsatellite (~7°/s), MEMS gyro at 100 Hz (ARW 0.3°/√h, bias RW 2°/h/√h), reference 0.05°/axis at 10 Hz; {DURATION_S} s, {} solves (re-linearized every {RELINEARIZE_S} s); {RUNS} runs",
             r0.r32.history.len()
@@ -370,71 +418,72 @@ pub(crate) fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
         ),
     ];
     for (name, s) in [
-        ("MEMS gyro", &all),
-        ("without angle/bias random walk", &rwfree),
+        ("MEMS gyro", &m.mc),
+        ("without angle/bias random walk", &m.mc_no_random_walk.inner),
     ] {
-        outcome.summary.push(format!(
+        lines.push(format!(
             "{name}: recovered to scale {:.0} ppm, misalignment {:.0} µrad, bias {:.2}°/h, drift d {:.2}°/h (RMS; formal σ of bias {:.2}°/h)",
             s.scale_ppm, s.misalign_urad, s.bias_deg_h, s.drift_deg_h,
             stats::rms(&s.c_std_mean[6..]) * deg_h
         ));
-        outcome.summary.push(format!(
+        lines.push(format!(
             "    rate error along the motion {:.2}°/h (raw {:.1}°/h); 60 s coast {:.3}° (raw {:.3}°); attitude at 600 s {:.1e} rad; f32 vs f64 ≤ {:.1e} of the error",
             s.rate_cal, s.rate_raw, s.coast_cal, s.coast_raw, s.w_post, s.f32_vs_f64
         ));
     }
-    if let Some(dir) = &ctx.out_dir {
-        let h = &r0.r32.history;
-        let csv = dir.join("gyro_cal_gnss_ref_convergence.csv");
-        let header = [
-            "t_s", "dc1", "dc2", "dc3", "dc4", "dc5", "dc6", "dc7", "dc8", "dc9", "std1", "std2",
-            "std3", "std4", "std5", "std6", "std7", "std8", "std9",
-        ];
-        write_csv(
-            &csv,
-            &header,
-            h.iter().map(|s| {
-                let mut row = vec![s.t];
-                row.extend((s.c - r0.truth_c).iter());
-                row.extend(s.c_std.iter());
-                row
-            }),
-        )?;
-        let deg_h = DEG_PER_H;
-        let panel = |name: &str, range: std::ops::Range<usize>, scale: f64| Panel {
-            y_label: name.to_string(),
-            series: range
-                .clone()
-                .map(|i| {
-                    Series::line(
-                        format!("δc{}", i + 1),
-                        h.iter()
-                            .map(|s| (s.t, (s.c - r0.truth_c)[i] * scale))
-                            .collect(),
-                        i - range.start,
-                    )
-                })
-                .chain(range.clone().map(|i| {
-                    Series::bound(
-                        format!("σ{}", i + 1),
-                        h.iter().map(|s| (s.t, s.c_std[i] * scale)).collect(),
-                        i - range.start,
-                    )
-                }))
-                .collect(),
-        };
-        let png = dir.join("gyro_cal_gnss_ref_convergence.png");
-        plot_panels(
-            &png,
-            "gyro-cal gnss-ref: calibration error after each solve, with formal σ",
-            "time (s)",
-            &[
-                panel("scale error (ppm)", 0..3, 1e6),
-                panel("misalignment error (µrad)", 3..6, 1e6),
-                panel("bias error (°/h)", 6..9, deg_h),
-            ],
-        )?;
-        outcome.files = vec![csv, png];
-    }
-    Ok(outcome)
+    lines
+}
+
+/// Run 0's calibration error after each solve, with the formal σ, as CSV and plot.
+fn write_files(dir: &std::path::Path, r0: &RunOutput) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    let h = &r0.r32.history;
+    let csv = dir.join("gyro_cal_gnss_ref_convergence.csv");
+    let header = [
+        "t_s", "dc1", "dc2", "dc3", "dc4", "dc5", "dc6", "dc7", "dc8", "dc9", "std1", "std2",
+        "std3", "std4", "std5", "std6", "std7", "std8", "std9",
+    ];
+    write_csv(
+        &csv,
+        &header,
+        h.iter().map(|s| {
+            let mut row = vec![s.t];
+            row.extend((s.c - r0.truth_c).iter());
+            row.extend(s.c_std.iter());
+            row
+        }),
+    )?;
+    let panel = |name: &str, range: std::ops::Range<usize>, scale: f64| Panel {
+        y_label: name.to_string(),
+        series: range
+            .clone()
+            .map(|i| {
+                Series::line(
+                    format!("δc{}", i + 1),
+                    h.iter()
+                        .map(|s| (s.t, (s.c - r0.truth_c)[i] * scale))
+                        .collect(),
+                    i - range.start,
+                )
+            })
+            .chain(range.clone().map(|i| {
+                Series::bound(
+                    format!("σ{}", i + 1),
+                    h.iter().map(|s| (s.t, s.c_std[i] * scale)).collect(),
+                    i - range.start,
+                )
+            }))
+            .collect(),
+    };
+    let png = dir.join("gyro_cal_gnss_ref_convergence.png");
+    plot_panels(
+        &png,
+        "gyro-cal gnss-ref: calibration error after each solve, with formal σ",
+        "time (s)",
+        &[
+            panel("scale error (ppm)", 0..3, 1e6),
+            panel("misalignment error (µrad)", 3..6, 1e6),
+            panel("bias error (°/h)", 6..9, DEG_PER_H),
+        ],
+    )?;
+    Ok(vec![csv, png])
 }

@@ -10,6 +10,7 @@ pub mod bound;
 pub mod fast_path;
 pub mod files;
 pub mod metrics;
+pub mod nmea;
 pub mod run;
 pub mod sample_level;
 pub mod world;
@@ -17,35 +18,44 @@ pub mod world;
 use anyhow::Result;
 use serde_json::json;
 
-use super::{Outcome, RunContext, Scenario, Variant};
-use metrics::{deg, evaluate, faults_json, FlightMetrics};
+use super::{Outcome, RunContext, Scenario, Variant, Variants};
+use metrics::{deg, evaluate, FaultOutcome, FlightMetrics};
 use run::{fly, FaultPlan, FlightConfig};
 use world::{Blockage, MotionKind};
+
+/// A variant's flight for a seed.
+type MakeFlight = fn(u64) -> FlightConfig;
 
 /// The scenario.
 pub const SCENARIO: Scenario = Scenario {
     name: "microsat",
     about: "the main job: a microsatellite in LEO, raw samples to attitude, every stage, faults",
-    variants: &[
-        Variant {
-            name: "nadir",
-            about: "10 min, nadir pointing with a slow spin and wobble, faults (the default run)",
-        },
-        Variant {
-            name: "detumbling",
-            about: "10 min, a detumbling body (about 3°/s at the start), faults",
-        },
-        Variant {
-            name: "short",
-            about: "30 s without faults (the integration test)",
-        },
-    ],
-    run,
+    variants: &Variants::<MakeFlight> {
+        list: &[
+            Variant::new(
+                "nadir",
+                "10 min, nadir pointing with a slow spin and wobble, faults (the default run)",
+                nadir,
+            ),
+            Variant::new(
+                "detumbling",
+                "10 min, a detumbling body (about 3°/s at the start), faults",
+                detumbling,
+            ),
+            Variant::new("short", "30 s without faults (the integration test)", short),
+        ],
+        run: |flight, ctx| run(&flight(ctx.seed), ctx),
+    },
 };
 
-/// The flight of a variant.
-pub fn flight(variant: &str, seed: u64) -> FlightConfig {
-    let faults = FaultPlan {
+/// Length of the ten-minute flights, s.
+const FLIGHT_S: f64 = 600.0;
+/// Natural faults (a satellite setting or rising) count after this, s.
+const NATURAL_FAULTS_AFTER_S: f64 = 60.0;
+
+/// The faults of the ten-minute flights.
+fn fault_plan() -> FaultPlan {
+    FaultPlan {
         // a short one inside the sample-level stretch (the core's correlators see it), the
         // 20 s one later, when the gyro is calibrated
         blockages: vec![
@@ -63,43 +73,111 @@ pub fn flight(variant: &str, seed: u64) -> FlightConfig {
         // one in the samples (the core's correlators see it), one on the fast path
         cycle_slips: vec![(50.0004, 1), (300.0004, 2)],
         bit_flip: Some(400.0107),
-    };
-    let base = FlightConfig {
-        duration_s: 600.0,
+    }
+}
+
+/// Ten minutes of nadir pointing with a slow spin and wobble, with the faults.
+pub fn nadir(seed: u64) -> FlightConfig {
+    FlightConfig {
+        duration_s: FLIGHT_S,
         motion: MotionKind::Nadir,
         u0: 0.4,
         gps_offset_s: 3600.0,
         detumble_rates: [0.0; 3],
-        faults,
+        faults: fault_plan(),
         seed,
         loop_bandwidth_hz: 1.0,
         sample_level_s: 60.0,
-    };
-    match variant {
-        "detumbling" => FlightConfig {
-            motion: MotionKind::Detumbling { duration_s: 600.0 },
-            detumble_rates: [0.04, -0.03, 0.02],
-            ..base
-        },
-        "short" => FlightConfig {
-            duration_s: 30.0,
-            sample_level_s: 5.0,
-            faults: FaultPlan::default(),
-            ..base
-        },
-        _ => base,
     }
 }
 
-fn run(ctx: &RunContext) -> Result<Outcome> {
+/// Ten minutes of a detumbling body, with the faults.
+pub fn detumbling(seed: u64) -> FlightConfig {
+    FlightConfig {
+        motion: MotionKind::Detumbling {
+            duration_s: FLIGHT_S,
+        },
+        detumble_rates: [0.04, -0.03, 0.02],
+        ..nadir(seed)
+    }
+}
+
+/// 30 s of nadir pointing without faults (the integration test).
+pub fn short(seed: u64) -> FlightConfig {
+    FlightConfig {
+        duration_s: 30.0,
+        sample_level_s: 5.0,
+        faults: FaultPlan::default(),
+        ..nadir(seed)
+    }
+}
+
+crate::metrics! {
+    /// Metrics of `microsat` (triples are body x, y, z).
+    pub struct Metrics {
+        /// Time to first fix (first attitude of any source).
+        #[metric(unit = "s")] pub ttff_s: f64,
+        /// RMS error of the receiver's attitude after convergence.
+        #[metric(unit = "deg")] pub rms_err_deg: [f64; 3],
+        /// Largest error after convergence.
+        #[metric(unit = "deg")] pub max_err_deg: [f64; 3],
+        /// Fraction of the flight with an attitude.
+        #[metric(unit = "")] pub availability: f64,
+        /// RMS of the bound √(2Δf (J⁻¹)_aa) over the converged stretch.
+        #[metric(unit = "deg")] pub bound_deg: [f64; 3],
+        /// Each fault's detection and recovery.
+        #[metric(nested)] pub faults: Vec<FaultOutcome>,
+        /// Time the fine filter first locked.
+        #[metric(unit = "s")] pub fine_lock_s: f64,
+        /// Wall time of the run.
+        #[metric(wall = "s")] pub wall_time_s: f64,
+        /// RMS error while the sample-level chain fed the receiver, after convergence.
+        #[metric(unit = "deg")] pub rms_err_samples_deg: [f64; 3],
+        /// The bound over the converged sample-level stretch (null: it ended before
+        /// convergence).
+        #[metric(unit = "deg")] pub bound_samples_deg: [f64; 3],
+        /// RMS error on the fast path.
+        #[metric(unit = "deg")] pub rms_err_fast_path_deg: [f64; 3],
+        /// The bound over the fast-path stretch.
+        #[metric(unit = "deg")] pub bound_fast_path_deg: [f64; 3],
+        /// What the sample-level stretch did.
+        #[metric(flatten)] #[serde(flatten)] pub sample_level: Option<SampleLevelMetrics>,
+    }
+}
+
+crate::metrics! {
+    /// The sample-level stretch at the start of the flight.
+    pub struct SampleLevelMetrics {
+        /// Length of the stretch run from synthesized samples.
+        #[metric(unit = "s")] pub sample_level_s: f64,
+        /// Acquisition searches in the sample-level stretch.
+        #[metric(unit = "")] pub sample_level_searches: usize,
+        /// Satellites the sample-level acquisition found (a channel each).
+        #[metric(unit = "")] pub sample_level_found: usize,
+        /// Sample-level tracking epochs that arrived after their filter epoch.
+        #[metric(unit = "")] pub sample_level_late: usize,
+        /// Observations the sample-level chain delivered.
+        #[metric(unit = "")] pub sample_level_observations: usize,
+        /// Wall time of the sample-level stretch.
+        #[metric(wall = "s")] pub sample_level_wall_s: f64,
+        /// Wall time of the fast path.
+        #[metric(wall = "s")] pub fast_path_wall_s: f64,
+    }
+}
+
+fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
     let started = std::time::Instant::now();
-    let config = flight(&ctx.variant, ctx.seed);
     let bar = crate::report::progress(config.duration_s as u64, "flight (s)");
-    let record = fly(&config, Some(&bar))?;
+    let record = fly(config, Some(&bar))?;
     bar.finish_and_clear();
     let mut m = evaluate(&record, config.duration_s);
-    m.faults = metrics::evaluate_faults(&record, &config.faults, 60.0);
-    let mut o = outcome(&m, started.elapsed().as_secs_f64());
+    m.faults = metrics::evaluate_faults(&record, &config.faults, NATURAL_FAULTS_AFTER_S);
+    let wall_s = started.elapsed().as_secs_f64();
+    let mut o = Outcome::new(&metrics_of(&m, &record, wall_s))?;
+    o.paper = json!({
+        "case": "none: no paper flies this case; each paper's own case is its scenario (snapshot: 002, dcm: 000, gyro-cal: 001, one-stage: 003)",
+    });
+    o.summary = summary(&m, wall_s);
     sample_level_summary(&mut o, &record, &m);
     if let Some(dir) = &ctx.out_dir {
         let title = format!("microsat / {} / seed {}", ctx.variant, ctx.seed);
@@ -108,23 +186,39 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
     Ok(o)
 }
 
+fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Metrics {
+    let [(rs, bs, _), (rf, bf, _)] = m.by_path;
+    Metrics {
+        ttff_s: m.ttff_s,
+        rms_err_deg: deg(&m.receiver.rms),
+        max_err_deg: deg(&m.receiver.max),
+        availability: m.availability,
+        bound_deg: deg(&m.bound),
+        faults: m.faults.clone(),
+        fine_lock_s: m.fine_lock_s,
+        wall_time_s: wall_s,
+        rms_err_samples_deg: deg(&rs),
+        bound_samples_deg: deg(&bs),
+        rms_err_fast_path_deg: deg(&rf),
+        bound_fast_path_deg: deg(&bf),
+        sample_level: record.sample_stats.as_ref().map(|st| SampleLevelMetrics {
+            sample_level_s: record.sample_level_s,
+            sample_level_searches: st.searches,
+            sample_level_found: st.detections,
+            sample_level_late: st.late,
+            sample_level_observations: st.observations,
+            sample_level_wall_s: record.wall_s.0,
+            fast_path_wall_s: record.wall_s.1,
+        }),
+    }
+}
+
 /// What the sample-level stretch did, and the receiver's error on each input path.
 fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightMetrics) {
     let [(rs, bs, ns), (rf, bf, nf)] = m.by_path;
-    o.metric("rms_err_samples_deg", deg(&rs).to_vec())
-        .metric("bound_samples_deg", deg(&bs).to_vec())
-        .metric("rms_err_fast_path_deg", deg(&rf).to_vec())
-        .metric("bound_fast_path_deg", deg(&bf).to_vec());
     let Some(st) = &record.sample_stats else {
         return;
     };
-    o.metric("sample_level_s", record.sample_level_s)
-        .metric("sample_level_searches", st.searches)
-        .metric("sample_level_found", st.detections)
-        .metric("sample_level_late", st.late)
-        .metric("sample_level_observations", st.observations)
-        .metric("sample_level_wall_s", record.wall_s.0)
-        .metric("fast_path_wall_s", record.wall_s.1);
     let line = |name: &str, r: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>, n: usize| {
         let (r, b) = (deg(r), deg(b));
         format!(
@@ -163,20 +257,10 @@ fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightM
     }
 }
 
-fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
-    let mut o = Outcome::default();
-    o.metric("ttff_s", m.ttff_s)
-        .metric("rms_err_deg", deg(&m.receiver.rms).to_vec())
-        .metric("max_err_deg", deg(&m.receiver.max).to_vec())
-        .metric("availability", m.availability)
-        .metric("bound_deg", deg(&m.bound).to_vec())
-        .metric("faults", faults_json(&m.faults))
-        .metric("fine_lock_s", m.fine_lock_s)
-        .metric("wall_time_s", wall_s);
-    o.paper = json!({
-        "case": "none: no paper flies this case; each paper's own case is its scenario (snapshot: 002, dcm: 000, gyro-cal: 001, one-stage: 003)",
-    });
-    o.summary.push(format!(
+/// The stage table, the bound, the faults and the gyro bias.
+fn summary(m: &FlightMetrics, wall_s: f64) -> Vec<String> {
+    let mut o = vec![];
+    o.push(format!(
         "{:<34} {:>8} {:>26} {:>26} {:>7} {:>5}",
         "stage", "first s", "RMS error x/y/z (deg)", "max error x/y/z (deg)", "avail", "sats"
     ));
@@ -198,11 +282,11 @@ fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
         )
     };
     for s in &m.stages {
-        o.summary.push(row(s));
+        o.push(row(s));
     }
-    o.summary.push(row(&m.receiver));
+    o.push(row(&m.receiver));
     let b = deg(&m.bound);
-    o.summary.push(format!(
+    o.push(format!(
         "bound (√(2Δf (J⁻¹)_aa), same geometry and C/N0): {:.4}/{:.4}/{:.4} deg; RMS/bound {:.2}/{:.2}/{:.2}",
         b[0],
         b[1],
@@ -211,12 +295,12 @@ fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
         m.receiver.rms.y / m.bound.y,
         m.receiver.rms.z / m.bound.z
     ));
-    o.summary.push(format!(
+    o.push(format!(
         "satellites tracked: mean {:.1}, min {}, max {}",
         m.tracked.0, m.tracked.1, m.tracked.2
     ));
     for f in &m.faults {
-        o.summary.push(format!(
+        o.push(format!(
             "fault {:<36} detected {:<5} recovered {:>7} s  {}",
             f.name,
             f.detected,
@@ -224,11 +308,11 @@ fn outcome(m: &FlightMetrics, wall_s: f64) -> Outcome {
             f.detail
         ));
     }
-    o.summary.push(format!(
+    o.push(format!(
         "gyro bias estimate − truth at the end: {:.1}/{:.1}/{:.1} °/h (truth {:.1}/{:.1}/{:.1} °/h)",
         m.gyro_bias_error.x, m.gyro_bias_error.y, m.gyro_bias_error.z,
         m.gyro_bias_truth.x, m.gyro_bias_truth.y, m.gyro_bias_truth.z
     ));
-    o.summary.push(format!("wall time {wall_s:.1} s"));
+    o.push(format!("wall time {wall_s:.1} s"));
     o
 }

@@ -1,16 +1,17 @@
 //! The scenarios: one module per experiment, each a [`Scenario`] in [`SCENARIOS`].
 //!
-//! A scenario takes a [`RunContext`] (variant, seed, output directory) and returns an
-//! [`Outcome`]: metrics named as its issue specifies, the paper's figures for the same case,
-//! human summary lines, and the files it wrote. It reports progress on stderr only.
+//! A scenario's variants are one table ([`Variants`]): each variant's name, description and
+//! configuration, and the one function that runs a configuration with a [`RunContext`] (variant,
+//! seed, output directory). It returns an [`Outcome`]: its metrics struct (declared with
+//! [`metrics!`](crate::metrics), named as its issue specifies), the paper's figures for the
+//! same case, human summary lines, and the files it wrote. It reports progress on stderr only.
 //!
 //! To add a scenario: write `scenarios/<name>.rs` with a `pub const SCENARIO: Scenario`, declare
-//! the module below and append it to [`SCENARIOS`].
-
-use std::path::PathBuf;
+//! the module below and append it to [`SCENARIOS`]. To add a variant: add a row to its table.
 
 use anyhow::{anyhow, bail};
-use serde_json::{json, Map, Value};
+
+pub use crate::outcome::{Outcome, RunContext};
 
 pub mod dcm;
 pub mod gyro_cal;
@@ -41,87 +42,108 @@ pub struct Scenario {
     pub name: &'static str,
     /// One line for `host-sim list`.
     pub about: &'static str,
-    /// The variants; the first is the default.
-    pub variants: &'static [Variant],
-    /// Runs it.
-    pub run: fn(&RunContext) -> anyhow::Result<Outcome>,
+    /// Its variants, each with what it runs; the first is the default.
+    pub variants: &'static dyn VariantTable,
 }
 
-/// A variant of a scenario.
-pub struct Variant {
+/// A variant of a scenario: its name, a line for `host-sim list`, and what it runs (`config`,
+/// of the scenario's own type: a configuration, a constructor, a function).
+pub struct Variant<C: 'static> {
     /// Name on the command line (`--variant <name>`).
     pub name: &'static str,
     /// One line for `host-sim list`.
     pub about: &'static str,
+    /// What the variant runs, handed to its scenario's runner.
+    pub config: C,
 }
 
-/// What a scenario run is asked to do.
-#[derive(Clone, Debug)]
-pub struct RunContext {
-    /// The variant's name (already validated).
-    pub variant: String,
-    /// Seed of every random stream of the run.
-    pub seed: u64,
-    /// Where to write CSV and PNG files; `None` writes nothing.
-    pub out_dir: Option<PathBuf>,
+/// A scenario's variants and the one function that runs any of them: a variant cannot exist
+/// without its configuration, nor run another's.
+pub struct Variants<C: 'static> {
+    /// The variants; the first is the default.
+    pub list: &'static [Variant<C>],
+    /// Runs a variant's configuration.
+    pub run: fn(&C, &RunContext) -> anyhow::Result<Outcome>,
 }
 
-/// What a scenario run produced.
-#[derive(Clone, Debug, Default)]
-pub struct Outcome {
-    /// Metrics, named as the scenario's issue specifies (numbers, arrays of numbers, booleans).
-    pub metrics: Map<String, Value>,
-    /// The source paper's figures for the same case (`null` when the paper has none).
-    pub paper: Value,
-    /// Lines for the human summary (stdout without `--json`).
-    pub summary: Vec<String>,
-    /// Files written into the output directory.
-    pub files: Vec<PathBuf>,
+impl<C> Variant<C> {
+    /// The variant `name` (`about` for `host-sim list`) running `config`.
+    pub const fn new(name: &'static str, about: &'static str, config: C) -> Self {
+        Self {
+            name,
+            about,
+            config,
+        }
+    }
 }
 
-impl Outcome {
-    /// Adds a metric.
-    pub fn metric(&mut self, name: &str, value: impl Into<Value>) -> &mut Self {
-        self.metrics.insert(name.to_string(), value.into());
-        self
+impl<C> Variants<C> {
+    /// The variant called `name`.
+    ///
+    /// # Errors
+    /// No variant of that name.
+    pub fn get(&self, name: &str) -> anyhow::Result<&'static Variant<C>> {
+        self.list.iter().find(|v| v.name == name).ok_or_else(|| {
+            anyhow!(
+                "no variant {name:?}; variants: {}",
+                self.list
+                    .iter()
+                    .map(|v| v.name)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+    }
+}
+
+/// The variants of a scenario, whatever their configuration type.
+pub trait VariantTable: Sync {
+    /// `(name, about)` of each variant; the first is the default.
+    fn names(&self) -> Vec<(&'static str, &'static str)>;
+    /// Runs the variant called `ctx.variant`.
+    ///
+    /// # Errors
+    /// No such variant, or the run's own error.
+    fn run(&self, ctx: &RunContext) -> anyhow::Result<Outcome>;
+}
+
+impl<C: Sync> VariantTable for Variants<C> {
+    fn names(&self) -> Vec<(&'static str, &'static str)> {
+        self.list.iter().map(|v| (v.name, v.about)).collect()
     }
 
-    /// The JSON document printed by `--json`:
-    /// `{scenario, variant, seed, metrics, paper, files}`.
-    pub fn to_json(&self, scenario: &str, variant: &str, seed: u64) -> Value {
-        json!({
-            "scenario": scenario,
-            "variant": variant,
-            "seed": seed,
-            "metrics": Value::Object(self.metrics.clone()),
-            "paper": self.paper.clone(),
-            "files": self.files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        })
+    fn run(&self, ctx: &RunContext) -> anyhow::Result<Outcome> {
+        let variant = self.get(&ctx.variant)?;
+        (self.run)(&variant.config, ctx)
     }
 }
 
 impl Scenario {
     /// The variant called `name`, or the default (first) one for `None`.
     pub fn variant(&self, name: Option<&str>) -> anyhow::Result<&'static str> {
+        let names = self.variants.names();
         match name {
-            None => self
-                .variants
+            None => names
                 .first()
-                .map(|v| v.name)
+                .map(|v| v.0)
                 .ok_or_else(|| anyhow!("scenario {} has no variants", self.name)),
-            Some(n) => match self.variants.iter().find(|v| v.name == n) {
-                Some(v) => Ok(v.name),
+            Some(n) => match names.iter().find(|v| v.0 == n) {
+                Some(v) => Ok(v.0),
                 None => bail!(
                     "scenario {} has no variant {n:?}; variants: {}",
                     self.name,
-                    self.variants
-                        .iter()
-                        .map(|v| v.name)
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    names.iter().map(|v| v.0).collect::<Vec<_>>().join(", ")
                 ),
             },
         }
+    }
+
+    /// Runs the variant `ctx.variant`.
+    ///
+    /// # Errors
+    /// No such variant, or the run's own error.
+    pub fn run(&self, ctx: &RunContext) -> anyhow::Result<Outcome> {
+        self.variants.run(ctx)
     }
 }
 
@@ -144,7 +166,7 @@ pub fn find(name: &str) -> anyhow::Result<&'static Scenario> {
 pub fn run_by_name(name: &str, variant: Option<&str>, seed: u64) -> anyhow::Result<Outcome> {
     let scenario = find(name)?;
     let variant = scenario.variant(variant)?;
-    (scenario.run)(&RunContext {
+    scenario.run(&RunContext {
         variant: variant.to_string(),
         seed,
         out_dir: None,
@@ -161,9 +183,29 @@ pub fn listing() -> String {
             ""
         };
         s.push_str(&format!("{}{default}: {}\n", sc.name, sc.about));
-        for v in sc.variants {
-            s.push_str(&format!("    --variant {:<18} {}\n", v.name, v.about));
+        for (name, about) in sc.variants.names() {
+            s.push_str(&format!("    --variant {name:<18} {about}\n"));
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scenario_has_variants_with_distinct_names_and_a_default() {
+        for sc in SCENARIOS {
+            let names: Vec<&str> = sc.variants.names().iter().map(|v| v.0).collect();
+            assert!(!names.is_empty(), "{}", sc.name);
+            let mut unique = names.clone();
+            unique.sort_unstable();
+            unique.dedup();
+            assert_eq!(unique.len(), names.len(), "{}: {names:?}", sc.name);
+            assert_eq!(sc.variant(None).unwrap(), names[0]);
+            assert!(sc.variant(Some("no-such-variant")).is_err());
+        }
+        assert!(find(DEFAULT_SCENARIO).is_ok());
+    }
 }

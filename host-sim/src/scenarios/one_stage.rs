@@ -38,77 +38,141 @@ use std::sync::Arc;
 use gnss_attitude::attitude::one_stage::{EstimatedAngles, FilterMode};
 use serde_json::{json, Value};
 
-use super::{Outcome, RunContext, Scenario, Variant};
+use super::{Outcome, RunContext, Scenario, Variant, Variants};
 use runs::{monte_carlo, sample_level, summarize, Summary, RUNS};
 use samples::{record_source, Recording};
 use sim::{RunConfig, RunResult};
 use source::IqFastPath;
 use truth::Motion;
 
+/// The paper's cases and the two stress tests, each run from samples or on the I/Q path only.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Case {
+    /// 8 satellites, Δf = 2 Hz, zero initial error.
+    EightSat2Hz,
+    /// 8 satellites, Δf = 0.5 Hz.
+    EightSatHalfHz,
+    /// The first 2 satellites, Δf = 2 Hz.
+    TwoSat2Hz,
+    /// 8 satellites, Δf = 2 Hz, 5° initial error.
+    Init5Deg,
+    /// 8 satellites, Δf = 2 Hz, motion A.
+    Dynamic,
+    /// 8 satellites, Δf = 2 Hz, unknown line biases.
+    LineBias,
+}
+
+/// What a variant runs: a case, and whether only on the I/Q fast path.
+#[derive(Clone, Copy, Debug)]
+pub struct Plan {
+    /// The case.
+    pub case: Case,
+    /// Only the I/Q fast path (the `-iq` variants).
+    pub iq_only: bool,
+}
+
+const fn plan(case: Case, iq_only: bool) -> Plan {
+    Plan { case, iq_only }
+}
+
+/// The `-iq` twin of a case: the I/Q fast path only.
+const fn iq(name: &'static str, case: Case) -> Variant<Plan> {
+    Variant::new(
+        name,
+        "the same case on the I/Q fast path only",
+        plan(case, true),
+    )
+}
+
 /// The scenario.
 pub const SCENARIO: Scenario = Scenario {
     name: "one-stage",
     about: "Paper 003: one-stage attitude filter from three-antenna samples (β about Y_c, geometry G1); `-iq` variants: I/Q fast path only",
-    variants: &[
-        Variant { name: "8sat-2hz", about: "8 satellites, Δf = 2 Hz, zero initial error (paper: 0.75′)" },
-        Variant { name: "8sat-0.5hz", about: "8 satellites, Δf = 0.5 Hz (paper: 0.34′)" },
-        Variant { name: "2sat-2hz", about: "first 2 satellites (el 10°, 20°), Δf = 2 Hz (paper: 5.48′)" },
-        Variant { name: "8sat-2hz-init5deg", about: "8 satellites, Δf = 2 Hz, 5° initial error (paper: 0.77′ steady state)" },
-        Variant { name: "dynamic", about: "8 satellites, Δf = 2 Hz, motion A: β̇ = (a0/V0) sin νt (stress test)" },
-        Variant { name: "linebias", about: "8 satellites, Δf = 2 Hz, unknown line biases, with and without bias states" },
-        Variant { name: "8sat-2hz-iq", about: "8sat-2hz on the I/Q fast path only" },
-        Variant { name: "8sat-0.5hz-iq", about: "8sat-0.5hz on the I/Q fast path only" },
-        Variant { name: "2sat-2hz-iq", about: "2sat-2hz on the I/Q fast path only" },
-        Variant { name: "8sat-2hz-init5deg-iq", about: "8sat-2hz-init5deg on the I/Q fast path only" },
-        Variant { name: "dynamic-iq", about: "dynamic on the I/Q fast path only" },
-        Variant { name: "linebias-iq", about: "linebias on the I/Q fast path only" },
-    ],
-    run,
+    variants: &Variants {
+        list: &[
+            Variant::new("8sat-2hz", "8 satellites, Δf = 2 Hz, zero initial error (paper: 0.75′)", plan(Case::EightSat2Hz, false)),
+            Variant::new("8sat-0.5hz", "8 satellites, Δf = 0.5 Hz (paper: 0.34′)", plan(Case::EightSatHalfHz, false)),
+            Variant::new("2sat-2hz", "first 2 satellites (el 10°, 20°), Δf = 2 Hz (paper: 5.48′)", plan(Case::TwoSat2Hz, false)),
+            Variant::new("8sat-2hz-init5deg", "8 satellites, Δf = 2 Hz, 5° initial error (paper: 0.77′ steady state)", plan(Case::Init5Deg, false)),
+            Variant::new("dynamic", "8 satellites, Δf = 2 Hz, motion A: β̇ = (a0/V0) sin νt (stress test)", plan(Case::Dynamic, false)),
+            Variant::new("linebias", "8 satellites, Δf = 2 Hz, unknown line biases, with and without bias states", plan(Case::LineBias, false)),
+            iq("8sat-2hz-iq", Case::EightSat2Hz),
+            iq("8sat-0.5hz-iq", Case::EightSatHalfHz),
+            iq("2sat-2hz-iq", Case::TwoSat2Hz),
+            iq("8sat-2hz-init5deg-iq", Case::Init5Deg),
+            iq("dynamic-iq", Case::Dynamic),
+            iq("linebias-iq", Case::LineBias),
+        ],
+        run: |plan, ctx| run(*plan, ctx),
+    },
 };
 
 /// True line biases of antennas A, B, C in the `linebias` variant, rad (B−A = 0.35,
 /// C−A = −0.25).
 pub const LINE_BIAS: [f64; 3] = [0.2, 0.55, -0.05];
 
-/// The run configuration of a variant (without the `-iq` suffix) for one filter form.
-pub fn variant_config(variant: &str, mode: FilterMode) -> RunConfig {
-    let mut cfg = RunConfig::paper(mode);
-    match variant {
-        "8sat-0.5hz" => cfg.loop_bandwidth_hz = 0.5,
-        "2sat-2hz" => cfg.satellites = 2,
-        "8sat-2hz-init5deg" => {
-            cfg.initial_error_rad = 5f64.to_radians();
-            cfg.prior_sigma_rad = 5f64.to_radians();
+/// Initial attitude error (and prior σ) of [`Case::Init5Deg`], degrees.
+const INIT_ERROR_DEG: f64 = 5.0;
+
+impl Case {
+    /// The run configuration of the case for one filter form.
+    pub fn config(self, mode: FilterMode) -> RunConfig {
+        let mut cfg = RunConfig::paper(mode);
+        match self {
+            Case::EightSat2Hz => {}
+            Case::EightSatHalfHz => cfg.loop_bandwidth_hz = 0.5,
+            Case::TwoSat2Hz => cfg.satellites = 2,
+            Case::Init5Deg => {
+                cfg.initial_error_rad = INIT_ERROR_DEG.to_radians();
+                cfg.prior_sigma_rad = INIT_ERROR_DEG.to_radians();
+            }
+            Case::Dynamic => cfg.motion = Motion::MotionA,
+            Case::LineBias => {
+                cfg.line_bias = LINE_BIAS;
+                cfg.line_bias_states = true;
+            }
         }
-        "dynamic" => cfg.motion = Motion::MotionA,
-        "linebias" => {
-            cfg.line_bias = LINE_BIAS;
-            cfg.line_bias_states = true;
+        cfg
+    }
+
+    /// The paper's σ_β for the case, arc-minutes (`None`: not a case of the paper).
+    pub fn paper_sigma_arcmin(self) -> Option<f64> {
+        match self {
+            Case::EightSat2Hz => Some(0.75),
+            Case::EightSatHalfHz => Some(0.34),
+            Case::TwoSat2Hz => Some(5.48),
+            Case::Init5Deg => Some(0.77),
+            Case::Dynamic | Case::LineBias => None,
         }
-        _ => {}
     }
-    cfg
-}
 
-fn json_opt(v: Option<f64>) -> Value {
-    v.map_or(Value::Null, |x| json!(x))
-}
-
-fn json_num(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
+    /// The paper's figure as JSON (`null` when it has none).
+    fn paper_figure(self) -> Value {
+        self.paper_sigma_arcmin()
+            .map_or(Value::Null, |s| json!({ "sigma_arcmin": s }))
     }
-}
 
-fn paper_figure(variant: &str) -> Value {
-    match variant {
-        "8sat-2hz" => json!({ "sigma_arcmin": 0.75 }),
-        "8sat-0.5hz" => json!({ "sigma_arcmin": 0.34 }),
-        "2sat-2hz" => json!({ "sigma_arcmin": 5.48 }),
-        "8sat-2hz-init5deg" => json!({ "sigma_arcmin": 0.77 }),
-        _ => Value::Null,
+    /// The filter configurations: Gaussian, constant gain, then (paper cases) the three-angle
+    /// Gaussian filter, or ([`Case::LineBias`]) both forms without bias states.
+    fn configurations(self) -> Vec<RunConfig> {
+        let gauss = self.config(FilterMode::GaussianApproximation);
+        let cg = self.config(FilterMode::ConstantGain);
+        let mut configs = vec![gauss, cg];
+        if self.paper_sigma_arcmin().is_some() {
+            configs.push(RunConfig {
+                estimate: EstimatedAngles::ALL,
+                ..gauss
+            });
+        }
+        if self == Case::LineBias {
+            for base in [gauss, cg] {
+                configs.push(RunConfig {
+                    line_bias_states: false,
+                    ..base
+                });
+            }
+        }
+        configs
     }
 }
 
@@ -116,161 +180,335 @@ fn never(v: Option<f64>) -> String {
     v.map_or("never".into(), |v| format!("{v:.3} s"))
 }
 
-/// The filter configurations of a variant: Gaussian, constant gain, then (paper variants) the
-/// three-angle Gaussian filter, or (`linebias`) both forms without bias states.
-fn configurations(variant: &str) -> Vec<RunConfig> {
-    let gauss = variant_config(variant, FilterMode::GaussianApproximation);
-    let cg = variant_config(variant, FilterMode::ConstantGain);
-    let mut configs = vec![gauss, cg];
-    if paper_figure(variant) != Value::Null {
-        configs.push(RunConfig {
-            estimate: EstimatedAngles::ALL,
-            ..gauss
-        });
+crate::metrics! {
+    /// Metrics of `one-stage`. Unsuffixed figures come from the headline path (`input_path`);
+    /// `*_iq` from the I/Q fast path's Monte Carlo.
+    pub struct Metrics {
+        /// RMS of β̂ − β, Gaussian-approximation filter.
+        #[metric(unit = "arcmin")] pub sigma_arcmin: f64,
+        /// Loop-limited bound √(2Δf/J_β) for the same geometry.
+        #[metric(unit = "arcmin")] pub bound_arcmin: f64,
+        /// Time after which |β̂ − β| stays within 5 × bound (worst run; null: never).
+        #[metric(unit = "s")] pub pull_in_s: Option<f64>,
+        /// A run that did not pull in or was not locked at the end.
+        #[metric(unit = "")] pub false_lock: bool,
+        /// Where the headline comes from: `samples` or `iq`.
+        #[metric(unit = "")] pub input_path: &'static str,
+        /// Runs behind the headline.
+        #[metric(unit = "")] pub runs: usize,
+        /// σ_β of the Gaussian-approximation filter.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_gaussian: f64,
+        /// σ_β of the constant-gain filter.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_constant_gain: f64,
+        /// Pull-in time, Gaussian.
+        #[metric(unit = "s")] pub pull_in_s_gaussian: Option<f64>,
+        /// Pull-in time, constant gain.
+        #[metric(unit = "s")] pub pull_in_s_constant_gain: Option<f64>,
+        /// When the lock detector declared lock, Gaussian (worst run).
+        #[metric(unit = "s")] pub lock_declared_s_gaussian: Option<f64>,
+        /// When the lock detector declared lock, constant gain.
+        #[metric(unit = "s")] pub lock_declared_s_constant_gain: Option<f64>,
+        /// False lock of the constant-gain filter.
+        #[metric(unit = "")] pub false_lock_constant_gain: bool,
+        /// Runs in which the detector flagged a false lock, Gaussian.
+        #[metric(unit = "")] pub flagged_runs_gaussian: usize,
+        /// Runs in which the detector flagged a false lock, constant gain.
+        #[metric(unit = "")] pub flagged_runs_constant_gain: usize,
+        /// σ_β over the bound.
+        #[metric(unit = "")] pub sigma_over_bound: f64,
+        /// σ_β on the I/Q fast path, Gaussian.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_iq: f64,
+        /// σ_β on the I/Q fast path, constant gain.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_constant_gain_iq: f64,
+        /// Pull-in time on the I/Q fast path (worst run).
+        #[metric(unit = "s")] pub pull_in_s_iq: Option<f64>,
+        /// False lock of either filter form on the I/Q fast path.
+        #[metric(unit = "")] pub false_lock_iq: bool,
+        /// I/Q Monte Carlo runs per configuration.
+        #[metric(unit = "")] pub runs_iq: usize,
+        /// Relative standard deviation of one run's σ over the I/Q runs.
+        #[metric(unit = "")] pub sigma_run_spread_iq: f64,
+        /// Carrier wavelength (GPS L1).
+        #[metric(unit = "m")] pub wavelength_m: f64,
+        /// The sample-level path against the I/Q fast path (sample-level variants).
+        #[metric(flatten)] #[serde(flatten)] pub paths: Option<PathComparison>,
+        /// All three angles estimated (the paper's cases).
+        #[metric(flatten)] #[serde(flatten)] pub three_axis: Option<ThreeAxis>,
+        /// Without line-bias states (`linebias`).
+        #[metric(flatten)] #[serde(flatten)] pub line_bias: Option<LineBiasFigures>,
     }
-    if variant == "linebias" {
-        for base in [gauss, cg] {
-            configs.push(RunConfig {
-                line_bias_states: false,
-                ..base
-            });
-        }
-    }
-    configs
 }
 
-fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
-    let (variant, iq_only) = match ctx.variant.strip_suffix("-iq") {
-        Some(v) => (v, true),
-        None => (ctx.variant.as_str(), false),
-    };
-    let configs = configurations(variant);
-    let gauss = configs[0];
-    let bound = gauss.bound_arcmin();
-    let iq_results = monte_carlo(&configs, ctx.seed, "one-stage: I/Q fast path")?;
-    let iq: Vec<Summary> = iq_results.iter().map(|r| summarize(r)).collect();
-    let sampled = if iq_only {
-        None
-    } else {
-        Some(sample_level(&configs, ctx.seed)?)
-    };
-    let (sums, path, runs) = match &sampled {
-        Some((_, res)) => (
-            res.iter()
+crate::metrics! {
+    /// The sample-level path against the I/Q fast path: σ ratio, the information each
+    /// delivers, wall time.
+    pub struct PathComparison {
+        /// σ_β from samples over σ_β on the I/Q path.
+        #[metric(unit = "")] pub sigma_ratio_samples_to_iq: f64,
+        /// Fisher information of β per epoch from samples against the ideal `J_β T`.
+        #[metric(unit = "dB")] pub information_loss_db_samples: f64,
+        /// The same on the I/Q fast path.
+        #[metric(unit = "dB")] pub information_loss_db_iq: f64,
+        /// What the fixed-point chain loses against the I/Q path.
+        #[metric(unit = "dB")] pub chain_loss_db: f64,
+        /// The chain's loss below 10 Hz (50-epoch means), where the loop lives.
+        #[metric(unit = "dB")] pub chain_loss_db_low_frequency: f64,
+        /// Loss predicted from the other satellites' cross-correlation.
+        #[metric(unit = "dB")] pub cross_correlation_loss_db_predicted: f64,
+        /// Measured discriminator slope over the slope the filter expects, samples.
+        #[metric(unit = "")] pub loop_gain_factor_samples: f64,
+        /// The same on the I/Q path.
+        #[metric(unit = "")] pub loop_gain_factor_iq: f64,
+        /// The bound at the information the samples delivered.
+        #[metric(unit = "arcmin")] pub bound_arcmin_measured_information: f64,
+        /// Mean C/N0 the channels reported.
+        #[metric(unit = "dB-Hz")] pub mean_cn0_reported_dbhz: f64,
+        /// Satellites tracked from samples.
+        #[metric(unit = "")] pub satellites_tracked: usize,
+        /// Filter epochs without observations.
+        #[metric(unit = "")] pub empty_epochs: usize,
+        /// Observations that arrived after their filter epoch.
+        #[metric(unit = "")] pub late_epochs: usize,
+        /// Wall time of the sample-level run.
+        #[metric(wall = "s")] pub sample_wall_s: f64,
+        /// Wall time of the sample synthesis.
+        #[metric(wall = "s")] pub sample_synthesis_s: f64,
+        /// Wall time of the sample-level tracking.
+        #[metric(wall = "s")] pub sample_tracking_s: f64,
+        /// Wall time of the sample-level acquisition.
+        #[metric(wall = "s")] pub sample_acquisition_s: f64,
+    }
+}
+
+crate::metrics! {
+    /// All three angles estimated by the Gaussian filter.
+    pub struct ThreeAxis {
+        /// σ_β with α, β, γ estimated.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_3axis: f64,
+        /// The same on the I/Q path.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_3axis_iq: f64,
+        /// Bound √(2Δf (J⁻¹)_ββ) (β shares information with γ).
+        #[metric(unit = "arcmin")] pub bound_arcmin_3axis: f64,
+        /// False lock of the three-angle filter.
+        #[metric(unit = "")] pub false_lock_3axis: bool,
+    }
+}
+
+crate::metrics! {
+    /// The `linebias` variant's figures (configurations 2 and 3: without bias states).
+    pub struct LineBiasFigures {
+        /// σ_β without bias states, Gaussian.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_without_bias_states: f64,
+        /// σ_β without bias states, constant gain.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_without_bias_states_constant_gain: f64,
+        /// σ_β without bias states on the I/Q path.
+        #[metric(unit = "arcmin")] pub sigma_arcmin_without_bias_states_iq: f64,
+        /// False lock without bias states.
+        #[metric(unit = "")] pub false_lock_without_bias_states: bool,
+        /// What estimating the biases costs: σ_β over the bound − 1.
+        #[metric(unit = "%")] pub bias_cost_percent: f64,
+        /// The same on the I/Q path.
+        #[metric(unit = "%")] pub bias_cost_percent_iq: f64,
+        /// Bound if the biases were re-learned every epoch.
+        #[metric(unit = "arcmin")] pub bound_arcmin_biases_unknown_per_epoch: f64,
+        /// RMS of the final line-bias errors, Gaussian (null without bias states).
+        #[metric(unit = "rad")] pub line_bias_error_rms_rad: f64,
+        /// The same, constant gain.
+        #[metric(unit = "rad")] pub line_bias_error_rms_rad_constant_gain: f64,
+    }
+}
+
+/// The runs behind a variant's figures.
+struct Runs {
+    configs: Vec<RunConfig>,
+    iq_results: Vec<Vec<RunResult>>,
+    iq: Vec<Summary>,
+    sampled: Option<(Arc<Recording>, Vec<RunResult>)>,
+    /// The headline summaries (samples, or the I/Q path), per configuration.
+    sums: Vec<Summary>,
+    bound: f64,
+}
+
+impl Runs {
+    fn run(plan: Plan, seed: u64) -> anyhow::Result<Self> {
+        let configs = plan.case.configurations();
+        let bound = configs[0].bound_arcmin();
+        let iq_results = monte_carlo(&configs, seed, "one-stage: I/Q fast path")?;
+        let iq: Vec<Summary> = iq_results.iter().map(|r| summarize(r)).collect();
+        let sampled = if plan.iq_only {
+            None
+        } else {
+            Some(sample_level(&configs, seed)?)
+        };
+        let sums = match &sampled {
+            Some((_, res)) => res
+                .iter()
                 .map(|r| summarize(std::slice::from_ref(r)))
                 .collect(),
-            "samples",
-            1,
-        ),
-        None => (iq.clone(), "iq", RUNS),
-    };
-    let (g, c) = (&sums[0], &sums[1]);
-    // how much one 60 s run's σ scatters (relative standard deviation over the I/Q runs)
-    let per_run: Vec<f64> = iq_results[0].iter().map(|r| r.rms_arcmin).collect();
-    let spread = crate::stats::std_dev(&per_run) / crate::stats::mean(&per_run);
-
-    let mut outcome = Outcome::default();
-    outcome
-        .metric("sigma_arcmin", g.sigma_arcmin)
-        .metric("bound_arcmin", bound)
-        .metric("pull_in_s", json_opt(g.pull_in_s))
-        .metric("false_lock", g.false_lock)
-        .metric("input_path", path)
-        .metric("runs", runs)
-        .metric("sigma_arcmin_gaussian", g.sigma_arcmin)
-        .metric("sigma_arcmin_constant_gain", c.sigma_arcmin)
-        .metric("pull_in_s_gaussian", json_opt(g.pull_in_s))
-        .metric("pull_in_s_constant_gain", json_opt(c.pull_in_s))
-        .metric("lock_declared_s_gaussian", json_opt(g.locked_s))
-        .metric("lock_declared_s_constant_gain", json_opt(c.locked_s))
-        .metric("false_lock_constant_gain", c.false_lock)
-        .metric("flagged_runs_gaussian", g.flagged_runs)
-        .metric("flagged_runs_constant_gain", c.flagged_runs)
-        .metric("sigma_over_bound", g.sigma_arcmin / bound)
-        .metric("sigma_arcmin_iq", iq[0].sigma_arcmin)
-        .metric("sigma_arcmin_constant_gain_iq", iq[1].sigma_arcmin)
-        .metric("pull_in_s_iq", json_opt(iq[0].pull_in_s))
-        .metric("false_lock_iq", iq[0].false_lock || iq[1].false_lock)
-        .metric("runs_iq", RUNS)
-        .metric("sigma_run_spread_iq", spread)
-        .metric("wavelength_m", truth::WAVELENGTH_M);
-    let mut summary = vec![format!(
-        "{} satellites of G1, {} dB-Hz, Δf = {} Hz, λ = {:.4} m, {} s runs, first {:.0} % discarded; headline: {}",
-        gauss.satellites,
-        gauss.cn0_dbhz,
-        gauss.loop_bandwidth_hz,
-        truth::WAVELENGTH_M,
-        gauss.duration_s,
-        100.0 * gauss.discard,
-        if iq_only {
-            format!("I/Q fast path, {RUNS} runs")
-        } else {
-            "samples (2.6 Msps CS8 → core acquisition, correlators, tracking, adapter), one run".into()
-        }
-    )];
-    summary.push(format!(
-        "σ_β: Gaussian approximation {:.3}′, constant gain {:.3}′; bound √(2Δf/J_β) {:.3}′; I/Q fast path ({RUNS} runs) {:.3}′ / {:.3}′ (one run's σ scatters by ±{:.1} %)",
-        g.sigma_arcmin, c.sigma_arcmin, bound, iq[0].sigma_arcmin, iq[1].sigma_arcmin, 100.0 * spread
-    ));
-    summary.push(format!(
-        "pull-in (worst run): Gaussian {}, constant gain {}; false lock: {} / {} (I/Q: {} / {})",
-        never(g.pull_in_s),
-        never(c.pull_in_s),
-        g.false_lock,
-        c.false_lock,
-        iq[0].false_lock,
-        iq[1].false_lock
-    ));
-    if let Some((rec, _)) = &sampled {
-        compare_paths(
-            &mut outcome,
-            &mut summary,
-            &gauss,
-            rec,
-            g,
-            &iq[0],
+            None => iq.clone(),
+        };
+        Ok(Self {
+            configs,
+            iq_results,
+            iq,
+            sampled,
+            sums,
             bound,
-            ctx.seed,
-        )?;
+        })
     }
-    if sums.len() > 2 && variant != "linebias" {
-        let three = configs[2];
-        let b3 = three.bound_arcmin();
-        outcome
-            .metric("sigma_arcmin_3axis", sums[2].sigma_arcmin)
-            .metric("sigma_arcmin_3axis_iq", iq[2].sigma_arcmin)
-            .metric("bound_arcmin_3axis", b3)
-            .metric("false_lock_3axis", sums[2].false_lock);
+
+    fn path(&self) -> (&'static str, usize) {
+        match self.sampled {
+            Some(_) => ("samples", 1),
+            None => ("iq", RUNS),
+        }
+    }
+
+    /// How much one 60 s run's σ scatters (relative standard deviation over the I/Q runs).
+    fn spread(&self) -> f64 {
+        let per_run: Vec<f64> = self.iq_results[0].iter().map(|r| r.rms_arcmin).collect();
+        crate::stats::std_dev(&per_run) / crate::stats::mean(&per_run)
+    }
+
+    fn metrics(&self, case: Case, paths: Option<PathComparison>) -> Metrics {
+        let (g, c, iq, bound) = (&self.sums[0], &self.sums[1], &self.iq, self.bound);
+        let (path, runs) = self.path();
+        let three_axis = (self.sums.len() > 2 && case != Case::LineBias).then(|| ThreeAxis {
+            sigma_arcmin_3axis: self.sums[2].sigma_arcmin,
+            sigma_arcmin_3axis_iq: iq[2].sigma_arcmin,
+            bound_arcmin_3axis: self.configs[2].bound_arcmin(),
+            false_lock_3axis: self.sums[2].false_lock,
+        });
+        Metrics {
+            sigma_arcmin: g.sigma_arcmin,
+            bound_arcmin: bound,
+            pull_in_s: g.pull_in_s,
+            false_lock: g.false_lock,
+            input_path: path,
+            runs,
+            sigma_arcmin_gaussian: g.sigma_arcmin,
+            sigma_arcmin_constant_gain: c.sigma_arcmin,
+            pull_in_s_gaussian: g.pull_in_s,
+            pull_in_s_constant_gain: c.pull_in_s,
+            lock_declared_s_gaussian: g.locked_s,
+            lock_declared_s_constant_gain: c.locked_s,
+            false_lock_constant_gain: c.false_lock,
+            flagged_runs_gaussian: g.flagged_runs,
+            flagged_runs_constant_gain: c.flagged_runs,
+            sigma_over_bound: g.sigma_arcmin / bound,
+            sigma_arcmin_iq: iq[0].sigma_arcmin,
+            sigma_arcmin_constant_gain_iq: iq[1].sigma_arcmin,
+            pull_in_s_iq: iq[0].pull_in_s,
+            false_lock_iq: iq[0].false_lock || iq[1].false_lock,
+            runs_iq: RUNS,
+            sigma_run_spread_iq: self.spread(),
+            wavelength_m: truth::WAVELENGTH_M,
+            paths,
+            three_axis,
+            line_bias: (case == Case::LineBias)
+                .then(|| line_bias_metrics(&self.configs[0], &self.sums, iq, bound)),
+        }
+    }
+
+    fn summary(&self, plan: Plan) -> Vec<String> {
+        let gauss = &self.configs[0];
+        let (g, c, iq, bound) = (&self.sums[0], &self.sums[1], &self.iq, self.bound);
+        vec![
+            format!(
+                "{} satellites of G1, {} dB-Hz, Δf = {} Hz, λ = {:.4} m, {} s runs, first {:.0} % discarded; headline: {}",
+                gauss.satellites,
+                gauss.cn0_dbhz,
+                gauss.loop_bandwidth_hz,
+                truth::WAVELENGTH_M,
+                gauss.duration_s,
+                100.0 * gauss.discard,
+                if plan.iq_only {
+                    format!("I/Q fast path, {RUNS} runs")
+                } else {
+                    "samples (2.6 Msps CS8 → core acquisition, correlators, tracking, adapter), one run".into()
+                }
+            ),
+            format!(
+                "σ_β: Gaussian approximation {:.3}′, constant gain {:.3}′; bound √(2Δf/J_β) {:.3}′; I/Q fast path ({RUNS} runs) {:.3}′ / {:.3}′ (one run's σ scatters by ±{:.1} %)",
+                g.sigma_arcmin, c.sigma_arcmin, bound, iq[0].sigma_arcmin, iq[1].sigma_arcmin, 100.0 * self.spread()
+            ),
+            format!(
+                "pull-in (worst run): Gaussian {}, constant gain {}; false lock: {} / {} (I/Q: {} / {})",
+                never(g.pull_in_s),
+                never(c.pull_in_s),
+                g.false_lock,
+                c.false_lock,
+                iq[0].false_lock,
+                iq[1].false_lock
+            ),
+        ]
+    }
+
+    /// The headline runs' time series (and the I/Q run beside the sample-level one).
+    fn write_files(
+        &self,
+        dir: &std::path::Path,
+        variant: &str,
+    ) -> anyhow::Result<Vec<std::path::PathBuf>> {
+        let first = |r: &[RunResult]| r.first().cloned();
+        let (hg, hc): (Option<RunResult>, Option<RunResult>) = match &self.sampled {
+            Some((_, res)) => (res.first().cloned(), res.get(1).cloned()),
+            None => (first(&self.iq_results[0]), first(&self.iq_results[1])),
+        };
+        let (Some(hg), Some(hc)) = (hg, hc) else {
+            return Ok(Vec::new());
+        };
+        let iq_g = self
+            .sampled
+            .as_ref()
+            .and_then(|_| self.iq_results[0].first());
+        let run0 = files::Run0 {
+            path: self.path().0,
+            gauss: &hg,
+            cg: &hc,
+            iq_gauss: iq_g,
+        };
+        files::write_files(dir, variant, &run0, self.bound)
+    }
+}
+
+fn run(plan: Plan, ctx: &RunContext) -> anyhow::Result<Outcome> {
+    let runs = Runs::run(plan, ctx.seed)?;
+    let mut summary = runs.summary(plan);
+    let paths = match &runs.sampled {
+        Some((rec, _)) => Some(compare_paths(
+            &mut summary,
+            &runs.configs[0],
+            rec,
+            &runs.sums[0],
+            &runs.iq[0],
+            runs.bound,
+            ctx.seed,
+        )?),
+        None => None,
+    };
+    let m = runs.metrics(plan.case, paths);
+    if let Some(t) = &m.three_axis {
         summary.push(format!(
             "all three angles estimated (Gaussian): σ_β {:.3}′ (I/Q {:.3}′), bound √(2Δf (J⁻¹)_ββ) {:.3}′ (β shares information with γ)",
-            sums[2].sigma_arcmin, iq[2].sigma_arcmin, b3
+            t.sigma_arcmin_3axis, t.sigma_arcmin_3axis_iq, t.bound_arcmin_3axis
         ));
     }
-    if variant == "linebias" {
-        line_bias_metrics(&mut outcome, &mut summary, &gauss, &sums, &iq, bound);
+    if let Some(lb) = &m.line_bias {
+        summary.push(line_bias_summary(&runs.sums, lb));
     }
-    outcome.paper = paper_figure(variant);
+    let mut outcome = Outcome::new(&m)?;
+    outcome.paper = plan.case.paper_figure();
     outcome.summary = summary;
-
     if let Some(dir) = &ctx.out_dir {
-        let first = |r: &[RunResult]| r.first().cloned();
-        let (hg, hc): (Option<RunResult>, Option<RunResult>) = match &sampled {
-            Some((_, res)) => (res.first().cloned(), res.get(1).cloned()),
-            None => (first(&iq_results[0]), first(&iq_results[1])),
-        };
-        if let (Some(hg), Some(hc)) = (hg, hc) {
-            let iq_g = sampled.as_ref().and_then(|_| iq_results[0].first());
-            outcome.files = files::write_files(dir, &ctx.variant, path, &hg, &hc, iq_g, bound)?;
-        }
+        outcome.files = runs.write_files(dir, &ctx.variant)?;
     }
     Ok(outcome)
 }
 
 /// The sample-level path against the I/Q fast path: σ ratio, the information each delivers,
 /// wall time.
-#[allow(clippy::too_many_arguments)]
 fn compare_paths(
-    outcome: &mut Outcome,
     summary: &mut Vec<String>,
     gauss: &RunConfig,
     rec: &Arc<Recording>,
@@ -278,7 +516,7 @@ fn compare_paths(
     iq: &Summary,
     bound: f64,
     seed: u64,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<PathComparison> {
     let sky = truth::sky_g1(gauss.satellites);
     let mut iq_source = IqFastPath::new(&sky, gauss.cn0_dbhz, gauss.line_bias, seed);
     let iq_epochs = record_source(gauss, &mut iq_source)?;
@@ -288,46 +526,39 @@ fn compare_paths(
     // the other satellites' cross-correlation: (n − 1)(C/N0)T/1023 of the noise (signal scenario)
     let snr = 10f64.powf(gauss.cn0_dbhz / 10.0) * source::EPOCH_S;
     let mai_db = 10.0 * (1.0 + (st.satellites as f64 - 1.0) * snr / 1023.0).log10();
-    outcome
-        .metric(
-            "sigma_ratio_samples_to_iq",
-            g.sigma_arcmin / iq.sigma_arcmin,
-        )
-        .metric("information_loss_db_samples", loss_s.loss_db)
-        .metric("information_loss_db_iq", loss_iq.loss_db)
-        .metric("chain_loss_db", loss_s.loss_db - loss_iq.loss_db)
-        .metric(
-            "chain_loss_db_low_frequency",
-            10.0 * (loss_iq.ratio_low_frequency / loss_s.ratio_low_frequency).log10(),
-        )
-        .metric("cross_correlation_loss_db_predicted", mai_db)
-        .metric("loop_gain_factor_samples", loss_s.slope_over_expected)
-        .metric("loop_gain_factor_iq", loss_iq.slope_over_expected)
-        .metric(
-            "bound_arcmin_measured_information",
-            loss_s.bound_arcmin(bound),
-        )
-        .metric("mean_cn0_reported_dbhz", st.mean_cn0_dbhz)
-        .metric("satellites_tracked", st.tracked)
-        .metric("empty_epochs", st.empty_epochs)
-        .metric("late_epochs", st.late)
-        .metric("sample_wall_s", rec.wall_s)
-        .metric("sample_synthesis_s", st.synthesis_s)
-        .metric("sample_tracking_s", st.tracking_s)
-        .metric("sample_acquisition_s", st.acquisition_s);
+    let m = PathComparison {
+        sigma_ratio_samples_to_iq: g.sigma_arcmin / iq.sigma_arcmin,
+        information_loss_db_samples: loss_s.loss_db,
+        information_loss_db_iq: loss_iq.loss_db,
+        chain_loss_db: loss_s.loss_db - loss_iq.loss_db,
+        chain_loss_db_low_frequency: 10.0
+            * (loss_iq.ratio_low_frequency / loss_s.ratio_low_frequency).log10(),
+        cross_correlation_loss_db_predicted: mai_db,
+        loop_gain_factor_samples: loss_s.slope_over_expected,
+        loop_gain_factor_iq: loss_iq.slope_over_expected,
+        bound_arcmin_measured_information: loss_s.bound_arcmin(bound),
+        mean_cn0_reported_dbhz: st.mean_cn0_dbhz,
+        satellites_tracked: st.tracked,
+        empty_epochs: st.empty_epochs,
+        late_epochs: st.late,
+        sample_wall_s: rec.wall_s,
+        sample_synthesis_s: st.synthesis_s,
+        sample_tracking_s: st.tracking_s,
+        sample_acquisition_s: st.acquisition_s,
+    };
     summary.push(format!(
         "samples vs I/Q fast path: σ ratio {:.3}; information per epoch vs ideal (slope²/var of u_β at the truth, {} epochs): samples −{:.2} dB, I/Q −{:.2} dB → chain loss {:.2} dB (cross-correlation of the other satellites: {:.2} dB predicted), below 10 Hz {:.2} ± 0.2 dB; loop gain factor {:.3} / {:.3}; C/N0 reported {:.2} dB-Hz; bound at the measured information {:.3}′",
-        g.sigma_arcmin / iq.sigma_arcmin,
+        m.sigma_ratio_samples_to_iq,
         loss_s.epochs,
         loss_s.loss_db,
         loss_iq.loss_db,
-        loss_s.loss_db - loss_iq.loss_db,
+        m.chain_loss_db,
         mai_db,
-        10.0 * (loss_iq.ratio_low_frequency / loss_s.ratio_low_frequency).log10(),
+        m.chain_loss_db_low_frequency,
         loss_s.slope_over_expected,
         loss_iq.slope_over_expected,
         st.mean_cn0_dbhz,
-        loss_s.bound_arcmin(bound)
+        m.bound_arcmin_measured_information
     ));
     summary.push(format!(
         "sample path: {}/{} satellites tracked, {} empty and {} late filter epochs; wall time {:.1} s (synthesis {:.1} s, tracking {:.1} s, acquisition {:.1} s; release, {} threads)",
@@ -341,51 +572,43 @@ fn compare_paths(
         st.acquisition_s,
         rayon::current_num_threads()
     ));
-    Ok(())
+    Ok(m)
 }
 
 /// The `linebias` variant's extra figures (configurations 2 and 3: without bias states).
 fn line_bias_metrics(
-    outcome: &mut Outcome,
-    summary: &mut Vec<String>,
     gauss: &RunConfig,
     sums: &[Summary],
     iq: &[Summary],
     bound: f64,
-) {
+) -> LineBiasFigures {
     let (g, c, gn, cn) = (&sums[0], &sums[1], &sums[2], &sums[3]);
     let sky = truth::sky_g1(gauss.satellites);
-    let marginal = bound::loop_bound_arcmin(
-        gauss.loop_bandwidth_hz,
-        bound::information_rate_biases_unknown(0.0, &sky, gauss.cn0_dbhz),
-    );
-    outcome
-        .metric("sigma_arcmin_without_bias_states", gn.sigma_arcmin)
-        .metric(
-            "sigma_arcmin_without_bias_states_constant_gain",
-            cn.sigma_arcmin,
-        )
-        .metric("sigma_arcmin_without_bias_states_iq", iq[2].sigma_arcmin)
-        .metric("false_lock_without_bias_states", gn.false_lock)
-        .metric("bias_cost_percent", 100.0 * (g.sigma_arcmin / bound - 1.0))
-        .metric(
-            "bias_cost_percent_iq",
-            100.0 * (iq[0].sigma_arcmin / bound - 1.0),
-        )
-        .metric("bound_arcmin_biases_unknown_per_epoch", marginal)
-        .metric("line_bias_error_rms_rad", json_num(g.bias_error_rms_rad))
-        .metric(
-            "line_bias_error_rms_rad_constant_gain",
-            json_num(c.bias_error_rms_rad),
-        );
-    summary.push(format!(
+    LineBiasFigures {
+        sigma_arcmin_without_bias_states: gn.sigma_arcmin,
+        sigma_arcmin_without_bias_states_constant_gain: cn.sigma_arcmin,
+        sigma_arcmin_without_bias_states_iq: iq[2].sigma_arcmin,
+        false_lock_without_bias_states: gn.false_lock,
+        bias_cost_percent: 100.0 * (g.sigma_arcmin / bound - 1.0),
+        bias_cost_percent_iq: 100.0 * (iq[0].sigma_arcmin / bound - 1.0),
+        bound_arcmin_biases_unknown_per_epoch: bound::loop_bound_arcmin(
+            gauss.loop_bandwidth_hz,
+            bound::information_rate_biases_unknown(0.0, &sky, gauss.cn0_dbhz),
+        ),
+        line_bias_error_rms_rad: g.bias_error_rms_rad,
+        line_bias_error_rms_rad_constant_gain: c.bias_error_rms_rad,
+    }
+}
+
+fn line_bias_summary(sums: &[Summary], lb: &LineBiasFigures) -> String {
+    format!(
         "line biases B−A = {:.2} rad, C−A = {:.2} rad: with bias states σ_β {:.3}′ (Gaussian) / {:.3}′ (constant gain), without {:.3}′ / {:.3}′; bound if the biases were re-learned every epoch {:.3}′",
         LINE_BIAS[1] - LINE_BIAS[0],
         LINE_BIAS[2] - LINE_BIAS[0],
-        g.sigma_arcmin,
-        c.sigma_arcmin,
-        gn.sigma_arcmin,
-        cn.sigma_arcmin,
-        marginal
-    ));
+        sums[0].sigma_arcmin,
+        sums[1].sigma_arcmin,
+        lb.sigma_arcmin_without_bias_states,
+        lb.sigma_arcmin_without_bias_states_constant_gain,
+        lb.bound_arcmin_biases_unknown_per_epoch
+    )
 }

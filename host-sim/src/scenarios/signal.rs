@@ -29,7 +29,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
-use super::{Outcome, RunContext, Scenario, Variant};
+use super::{Outcome, RunContext, Scenario, Variant, Variants};
+use crate::arrays::triangle;
 use crate::chain::{self, ChainOutput, ChainParams};
 use crate::report::{plot_panels, progress, write_csv, Panel, Series};
 use crate::stats::phase_difference_rms_cycles;
@@ -41,12 +42,14 @@ use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 pub const SCENARIO: Scenario = Scenario {
     name: "signal",
     about: "fixed-point 3-antenna GPS L1 C/A chain on synthesized samples: acquisition, 60 s tracking, C/N0, phase differences",
-    variants: &[
-        Variant { name: "40dbhz", about: "8 satellites at 40 dB-Hz" },
-        Variant { name: "35dbhz", about: "8 satellites at 35 dB-Hz" },
-        Variant { name: "45dbhz", about: "8 satellites at 45 dB-Hz" },
-    ],
-    run,
+    variants: &Variants {
+        list: &[
+            Variant::new("40dbhz", "8 satellites at 40 dB-Hz", 40.0),
+            Variant::new("35dbhz", "8 satellites at 35 dB-Hz", 35.0),
+            Variant::new("45dbhz", "8 satellites at 45 dB-Hz", 45.0),
+        ],
+        run: |&cn0_dbhz, ctx| run(cn0_dbhz, ctx),
+    },
 };
 
 /// Sample rate, Hz.
@@ -61,16 +64,6 @@ pub const FIRST_TEN_CHIPS_OCTAL: [u16; 32] = [
     0o1764, 0o1772, 0o1775, 0o1776, 0o1156, 0o1467, 0o1633, 0o1715, 0o1746, 0o1763, 0o1063, 0o1706,
     0o1743, 0o1761, 0o1770, 0o1774, 0o1127, 0o1453, 0o1625, 0o1712,
 ];
-
-/// Paper 003's array: equilateral triangle of side `l`, origin at the middle of AB, X to B,
-/// Y to C (body frame, m).
-pub fn triangle(l: f64) -> Vec<Vector3<f64>> {
-    vec![
-        Vector3::new(-l / 2.0, 0.0, 0.0),
-        Vector3::new(l / 2.0, 0.0, 0.0),
-        Vector3::new(0.0, l * 3f64.sqrt() / 2.0, 0.0),
-    ]
-}
 
 /// The scene of the scenario at `cn0_dbhz`.
 pub fn scene(cn0_dbhz: f64, seed: u64) -> Scene {
@@ -139,36 +132,78 @@ fn wrap(x: f64) -> f64 {
     x - x.round()
 }
 
-fn run(ctx: &RunContext) -> Result<Outcome> {
-    let cn0 = match ctx.variant.as_str() {
-        "35dbhz" => 35.0,
-        "45dbhz" => 45.0,
-        _ => 40.0,
-    };
-    let params = params(cn0, ctx.seed, DURATION_S);
-    let bar = progress(1000, "signal chain");
-    let out = chain::run(&params, Some(&bar))?;
-    bar.finish_and_clear();
-    let sc = &params.scene;
-    let mut o = Outcome::default();
+crate::metrics! {
+    /// Metrics of `signal`.
+    pub struct Metrics {
+        /// PRN codes whose first 10 chips match IS-GPS-200 (of 32).
+        #[metric(unit = "")] pub prn_chips_ok: usize,
+        /// Visible satellites acquired.
+        #[metric(unit = "")] pub acq_found: usize,
+        /// Visible satellites not acquired.
+        #[metric(unit = "")] pub acq_missed: usize,
+        /// Detected PRNs that are not in the scene.
+        #[metric(unit = "")] pub acq_false: usize,
+        /// Largest acquisition Doppler error against the truth.
+        #[metric(unit = "Hz")] pub doppler_err_hz_max: f64,
+        /// Largest acquisition code-phase error against the truth.
+        #[metric(unit = "chip")] pub code_err_chips_max: f64,
+        /// Shortest over the satellites of the longest stretch with code and phase lock.
+        #[metric(unit = "s")] pub lock_held_s: f64,
+        /// Largest error of the 1 s C/N0 reports (from 2 s on) against the synthesized C/N0.
+        #[metric(unit = "dB")] pub cn0_err_db_max: f64,
+        /// RMS error of the inter-antenna carrier-phase differences from the prompts.
+        #[metric(unit = "cycle")] pub phase_diff_err_rms_cycles: f64,
+        /// Theoretical RMS of that difference for two independent prompts (thermal noise).
+        #[metric(unit = "cycle")] pub phase_diff_bound_cycles: f64,
+    }
+}
 
-    let chips_ok = (1..=32u8)
-        .filter(|&n| {
-            Prn::new(n)
-                .is_some_and(|p| p.first_ten_chips_octal() == FIRST_TEN_CHIPS_OCTAL[n as usize - 1])
-        })
-        .count();
+/// The PRNs of the GPS constellation the chain searches and checks.
+const PRN_COUNT: u8 = 32;
+/// Chips per code period.
+const CODE_CHIPS: f64 = 1023.0;
+/// Half a code period, chips (wraps code-phase errors into ±511.5).
+const HALF_CODE_CHIPS: f64 = CODE_CHIPS / 2.0;
+/// Coherent integration of one prompt, s.
+const PROMPT_S: f64 = 1e-3;
+/// Statistics start after the pull-in, s.
+const SETTLED_S: f64 = 2.0;
+/// Code periods between two C/N0 reports (the estimator reports once per second).
+const CN0_REPORT_EPOCHS: usize = 1000;
+
+/// Largest acquisition Doppler and code-phase errors against the truth.
+fn acquisition_errors(out: &ChainOutput, sc: &Scene) -> (f64, f64) {
     let (mut doppler_max, mut code_max) = (0.0f64, 0.0f64);
     for t in &out.tracked {
         let truth = sc.truth(t.scene_index, 0, 0.0);
         doppler_max =
             doppler_max.max((f64::from(t.acquisition.doppler_hz) - truth.doppler_hz).abs());
-        let e = (f64::from(t.acquisition.code_phase_chips) - truth.code_phase_chips + 511.5)
-            .rem_euclid(1023.0)
-            - 511.5;
+        let e = (f64::from(t.acquisition.code_phase_chips) - truth.code_phase_chips
+            + HALF_CODE_CHIPS)
+            .rem_euclid(CODE_CHIPS)
+            - HALF_CODE_CHIPS;
         code_max = code_max.max(e.abs());
     }
-    let stats = satellite_stats(&out, sc, cn0);
+    (doppler_max, code_max)
+}
+
+/// The receiver sees C/(N0 + I0): the other satellites' multiple-access interference, dB.
+/// Each leaks SNR_j · E|ρ|² ≈ SNR_j/1023 of noise power into a prompt (Gold-code
+/// cross-correlation). Returns `(I0/N0, dB)`.
+fn interference(cn0: f64, satellites: usize) -> (f64, f64) {
+    let snr = 10f64.powf(cn0 / 10.0) * PROMPT_S;
+    let interference = (satellites as f64 - 1.0) * snr / CODE_CHIPS;
+    (interference, 10.0 * (1.0 + interference).log10())
+}
+
+fn metrics(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Metrics {
+    let prn_chips_ok = (1..=PRN_COUNT)
+        .filter(|&n| {
+            Prn::new(n)
+                .is_some_and(|p| p.first_ten_chips_octal() == FIRST_TEN_CHIPS_OCTAL[n as usize - 1])
+        })
+        .count();
+    let (doppler_max, code_max) = acquisition_errors(out, sc);
     let lock_held = if out.tracked.len() < sc.satellites.len() {
         0.0
     } else {
@@ -177,60 +212,53 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
             .map(|s| s.lock_held_s)
             .fold(f64::INFINITY, f64::min)
     };
-    let cn0_err = stats.iter().map(|s| s.cn0_err_max).fold(0.0, f64::max);
     let (sum2, count) = stats.iter().fold((0.0, 0usize), |a, s| {
         (a.0 + s.phase_sum2, a.1 + s.phase_count)
     });
-    let phase_rms = if count > 0 {
-        (sum2 / count as f64).sqrt()
-    } else {
-        f64::NAN
-    };
-    let bound = phase_difference_rms_cycles(cn0, 1e-3);
-    // Multiple-access interference: each other satellite leaks SNR_j · E|ρ|² ≈ SNR_j/1023 of
-    // noise power into a prompt (Gold-code cross-correlation), so the receiver sees
-    // C/(N0 + I0), not the synthesized thermal C/N0.
-    let snr = 10f64.powf(cn0 / 10.0) * 1e-3;
-    let interference = (sc.satellites.len() as f64 - 1.0) * snr / 1023.0;
-    let mai_db = 10.0 * (1.0 + interference).log10();
-    let bound_mai = phase_difference_rms_cycles(cn0 - mai_db, 1e-3);
+    Metrics {
+        prn_chips_ok,
+        acq_found: out.tracked.len(),
+        acq_missed: sc.satellites.len() - out.tracked.len(),
+        acq_false: out.false_detections.len(),
+        doppler_err_hz_max: doppler_max,
+        code_err_chips_max: code_max,
+        lock_held_s: lock_held,
+        cn0_err_db_max: stats.iter().map(|s| s.cn0_err_max).fold(0.0, f64::max),
+        phase_diff_err_rms_cycles: if count > 0 {
+            (sum2 / count as f64).sqrt()
+        } else {
+            f64::NAN
+        },
+        phase_diff_bound_cycles: phase_difference_rms_cycles(cn0, PROMPT_S),
+    }
+}
 
-    o.metric("prn_chips_ok", chips_ok)
-        .metric("acq_found", out.tracked.len())
-        .metric("acq_missed", sc.satellites.len() - out.tracked.len())
-        .metric("acq_false", out.false_detections.len())
-        .metric("doppler_err_hz_max", doppler_max)
-        .metric("code_err_chips_max", code_max)
-        .metric("lock_held_s", lock_held)
-        .metric("cn0_err_db_max", cn0_err)
-        .metric("phase_diff_err_rms_cycles", phase_rms)
-        .metric("phase_diff_bound_cycles", bound);
-    o.paper = json!({
-        "note": "no paper figure for this chain; the issue's acceptance targets",
-        "prn_chips_ok": 32, "acq_missed": 0, "acq_false": 0,
-        "doppler_err_hz_max": 250.0, "code_err_chips_max": 0.5, "lock_held_s": 60.0,
-        "cn0_err_db_max": 1.5, "phase_diff_err_rms_cycles": "≈ phase_diff_bound_cycles",
-    });
-    o.summary.push(format!(
-        "{} satellites at {cn0} dB-Hz, CS8 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
-        sc.satellites.len(),
-        out.acquisition_seconds,
-        out.synthesis_seconds,
-        out.tracking_seconds
-    ));
+fn summary(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Vec<String> {
+    let (interference, mai_db) = interference(cn0, sc.satellites.len());
+    let bound = phase_difference_rms_cycles(cn0, PROMPT_S);
+    let bound_mai = phase_difference_rms_cycles(cn0 - mai_db, PROMPT_S);
     let cn0_err_mai = stats
         .iter()
         .map(|s| s.cn0_err_max_vs(cn0 - mai_db))
         .fold(0.0, f64::max);
-    o.summary.push(format!(
-        "C/N0 error against C/(N0 + I0) = {:.2} dB-Hz (what a prompt/noise-tap estimator measures): max {cn0_err_mai:.2} dB",
-        cn0 - mai_db
-    ));
-    o.summary.push(format!(
-        "multiple-access interference of the other satellites: I0/N0 = {interference:.3} ({mai_db:.2} dB below the thermal C/N0); phase-difference bound with it {bound_mai:.4} cycle (thermal only {bound:.4})"
-    ));
-    for s in &stats {
-        o.summary.push(format!(
+    let mut lines = vec![
+        format!(
+            "{} satellites at {cn0} dB-Hz, CS8 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
+            sc.satellites.len(),
+            out.acquisition_seconds,
+            out.synthesis_seconds,
+            out.tracking_seconds
+        ),
+        format!(
+            "C/N0 error against C/(N0 + I0) = {:.2} dB-Hz (what a prompt/noise-tap estimator measures): max {cn0_err_mai:.2} dB",
+            cn0 - mai_db
+        ),
+        format!(
+            "multiple-access interference of the other satellites: I0/N0 = {interference:.3} ({mai_db:.2} dB below the thermal C/N0); phase-difference bound with it {bound_mai:.4} cycle (thermal only {bound:.4})"
+        ),
+    ];
+    for s in stats {
+        lines.push(format!(
             "PRN {:2}: lock held {:.2} s (from {:.2} s), C/N0 mean {:.2} dB-Hz (max error {:.2} dB), phase-difference error RMS {:.4} cycle",
             s.prn,
             s.lock_held_s,
@@ -240,6 +268,24 @@ fn run(ctx: &RunContext) -> Result<Outcome> {
             (s.phase_sum2 / s.phase_count.max(1) as f64).sqrt()
         ));
     }
+    lines
+}
+
+fn run(cn0: f64, ctx: &RunContext) -> Result<Outcome> {
+    let params = params(cn0, ctx.seed, DURATION_S);
+    let bar = progress(1000, "signal chain");
+    let out = chain::run(&params, Some(&bar))?;
+    bar.finish_and_clear();
+    let sc = &params.scene;
+    let stats = satellite_stats(&out, sc, cn0);
+    let mut o = Outcome::new(&metrics(&out, sc, cn0, &stats))?;
+    o.paper = json!({
+        "note": "no paper figure for this chain; the issue's acceptance targets",
+        "prn_chips_ok": 32, "acq_missed": 0, "acq_false": 0,
+        "doppler_err_hz_max": 250.0, "code_err_chips_max": 0.5, "lock_held_s": 60.0,
+        "cn0_err_db_max": 1.5, "phase_diff_err_rms_cycles": "≈ phase_diff_bound_cycles",
+    });
+    o.summary = summary(&out, sc, cn0, &stats);
     if let Some(dir) = &ctx.out_dir {
         write_files(dir, &params, &out, &mut o, cn0)?;
     }
@@ -267,84 +313,106 @@ impl SatStats {
     }
 }
 
+/// The longest stretch with code and phase lock, and the time of the first lock, s.
+fn lock_stretch(epochs: &[crate::chain::EpochRecord]) -> (f64, f64) {
+    let (mut best, mut run_start, mut first_lock) = (0.0f64, None::<f64>, f64::NAN);
+    for e in epochs {
+        match (e.locked, run_start) {
+            (true, None) => {
+                run_start = Some(e.t);
+                if first_lock.is_nan() {
+                    first_lock = e.t;
+                }
+            }
+            (false, Some(s)) => {
+                best = best.max(e.t - s);
+                run_start = None;
+            }
+            _ => {}
+        }
+    }
+    if let (Some(s), Some(last)) = (run_start, epochs.last()) {
+        best = best.max(last.t + 0.5 * PROMPT_S - s);
+    }
+    (best, first_lock)
+}
+
+/// Sums over the settled epochs of one satellite: C/N0 reports, phase-difference errors, and
+/// the per-second rows of the CSV.
+#[derive(Default)]
+struct Settled {
+    cn0_err: f64,
+    cn0_sum: f64,
+    cn0_n: usize,
+    sum2: f64,
+    count: usize,
+    per_second: Vec<[f64; 5]>,
+}
+
+fn settled(t: &crate::chain::TrackedSatellite, sc: &Scene, cn0: f64) -> Settled {
+    let k = t.scene_index;
+    let mut acc = Settled::default();
+    // (sum of squared errors, count, second) of the current second
+    let mut second = (0.0, 0usize, SETTLED_S);
+    for (j, e) in t.epochs.iter().enumerate() {
+        if e.t < SETTLED_S {
+            continue;
+        }
+        // C/N0 reports change once per second: sample them once per 1000 epochs.
+        if j % CN0_REPORT_EPOCHS == 0 {
+            acc.cn0_err = acc.cn0_err.max((e.cn0_dbhz - cn0).abs());
+            acc.cn0_sum += e.cn0_dbhz;
+            acc.cn0_n += 1;
+        }
+        if e.t.floor() > second.2 && second.1 > 0 {
+            let doppler_err = e.doppler_hz - sc.truth(k, 0, e.t).doppler_hz;
+            acc.per_second.push([
+                second.2 + 1.0,
+                f64::from(t.acquisition.prn.number()),
+                e.cn0_dbhz,
+                doppler_err,
+                (second.0 / second.1 as f64).sqrt(),
+            ]);
+            second = (0.0, 0, e.t.floor());
+        }
+        let a = e.prompt[0];
+        for x in 1..3 {
+            let b = e.prompt[x];
+            let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / TAU;
+            let truth =
+                sc.truth(k, x, e.t).carrier_phase_cycles - sc.truth(k, 0, e.t).carrier_phase_cycles;
+            let err = wrap(measured - truth);
+            acc.sum2 += err * err;
+            acc.count += 1;
+            second.0 += err * err;
+            second.1 += 1;
+        }
+    }
+    acc
+}
+
 fn satellite_stats(out: &ChainOutput, sc: &Scene, cn0: f64) -> Vec<SatStats> {
     out.tracked
         .iter()
         .map(|t| {
-            let k = t.scene_index;
-            let (mut best, mut run_start, mut first_lock) = (0.0f64, None::<f64>, f64::NAN);
-            for e in &t.epochs {
-                match (e.locked, run_start) {
-                    (true, None) => {
-                        run_start = Some(e.t);
-                        if first_lock.is_nan() {
-                            first_lock = e.t;
-                        }
-                    }
-                    (false, Some(s)) => {
-                        best = best.max(e.t - s);
-                        run_start = None;
-                    }
-                    _ => {}
-                }
-            }
-            if let (Some(s), Some(last)) = (run_start, t.epochs.last()) {
-                best = best.max(last.t + 5e-4 - s);
-            }
-            let (mut cn0_err, mut cn0_sum, mut cn0_n) = (0.0f64, 0.0, 0usize);
-            let (mut sum2, mut count) = (0.0, 0usize);
-            let mut per_second = Vec::new();
-            let mut second = (0.0, 0usize, 2.0f64);
-            for (j, e) in t.epochs.iter().enumerate() {
-                if e.t < 2.0 {
-                    continue;
-                }
-                // C/N0 reports change once per second: sample them once per 1000 epochs.
-                if j % 1000 == 0 {
-                    cn0_err = cn0_err.max((e.cn0_dbhz - cn0).abs());
-                    cn0_sum += e.cn0_dbhz;
-                    cn0_n += 1;
-                }
-                if e.t.floor() > second.2 && second.1 > 0 {
-                    let doppler_err = e.doppler_hz - sc.truth(k, 0, e.t).doppler_hz;
-                    per_second.push([
-                        second.2 + 1.0,
-                        f64::from(t.acquisition.prn.number()),
-                        e.cn0_dbhz,
-                        doppler_err,
-                        (second.0 / second.1 as f64).sqrt(),
-                    ]);
-                    second = (0.0, 0, e.t.floor());
-                }
-                let a = e.prompt[0];
-                for x in 1..3 {
-                    let b = e.prompt[x];
-                    let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / TAU;
-                    let truth = sc.truth(k, x, e.t).carrier_phase_cycles
-                        - sc.truth(k, 0, e.t).carrier_phase_cycles;
-                    let err = wrap(measured - truth);
-                    sum2 += err * err;
-                    count += 1;
-                    second.0 += err * err;
-                    second.1 += 1;
-                }
-            }
+            let (best, first_lock) = lock_stretch(&t.epochs);
+            let acc = settled(t, sc, cn0);
             SatStats {
                 prn: t.acquisition.prn.number(),
                 cn0_reports: t
                     .epochs
                     .iter()
                     .enumerate()
-                    .filter(|(j, e)| e.t >= 2.0 && j % 1000 == 0)
+                    .filter(|(j, e)| e.t >= SETTLED_S && j % CN0_REPORT_EPOCHS == 0)
                     .map(|(_, e)| e.cn0_dbhz)
                     .collect(),
                 lock_held_s: best,
                 first_lock_s: first_lock,
-                cn0_err_max: cn0_err,
-                cn0_mean: cn0_sum / cn0_n.max(1) as f64,
-                phase_sum2: sum2,
-                phase_count: count,
-                per_second,
+                cn0_err_max: acc.cn0_err,
+                cn0_mean: acc.cn0_sum / acc.cn0_n.max(1) as f64,
+                phase_sum2: acc.sum2,
+                phase_count: acc.count,
+                per_second: acc.per_second,
             }
         })
         .collect()

@@ -23,9 +23,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
-use serde_json::{json, Value};
 
-use super::{Outcome, RunContext, Scenario, Variant};
+use super::{Outcome, RunContext, Scenario, Variant, Variants};
 use crate::report::{plot_lines, plot_panels, progress, write_csv, Panel, Series};
 use crate::stats;
 use crate::truth::kinematics::step_constant_rate;
@@ -35,17 +34,25 @@ pub const SCENARIO: Scenario = Scenario {
     name: "vector-ekf",
     about:
         "EKF toolkit: multiplicative attitude EKF from two vector measurements, Monte Carlo NEES",
-    variants: &[
-        Variant {
-            name: "nominal",
-            about: "0.06 rad/s tumble, σ = 0.01, 200 runs of 120 s",
-        },
-        Variant {
-            name: "fast-tumble",
-            about: "0.6 rad/s tumble: linearization over 0.06 rad steps",
-        },
-    ],
-    run,
+    variants: &Variants {
+        list: &[
+            Variant::new(
+                "nominal",
+                "0.06 rad/s tumble, σ = 0.01, 200 runs of 120 s",
+                Config {
+                    omega_mean: [0.03, -0.02, 0.045],
+                },
+            ),
+            Variant::new(
+                "fast-tumble",
+                "0.6 rad/s tumble: linearization over 0.06 rad steps",
+                Config {
+                    omega_mean: [0.3, -0.2, 0.45],
+                },
+            ),
+        ],
+        run,
+    },
 };
 
 /// Filter step, s.
@@ -64,21 +71,17 @@ const SIGMA_RW: f64 = 2e-4;
 const SIGMA_THETA0: f64 = 0.1;
 const SIGMA_OMEGA0: f64 = 0.01;
 
+/// What a variant changes: the mean body rate of the tumble.
 #[derive(Clone, Copy)]
-struct Config {
+pub struct Config {
+    /// Mean body rate, rad/s.
     omega_mean: [f64; 3],
 }
 
-fn config(variant: &str) -> Config {
-    match variant {
-        "fast-tumble" => Config {
-            omega_mean: [0.3, -0.2, 0.45],
-        },
-        _ => Config {
-            omega_mean: [0.03, -0.02, 0.045],
-        },
-    }
-}
+/// Degrees of freedom of the NEES (the six error states).
+const NEES_DOF: usize = 6;
+/// Probability outside the NEES interval.
+const NEES_ALPHA: f64 = 0.05;
 
 /// One epoch of one run.
 #[derive(Clone, Copy, Default)]
@@ -299,19 +302,47 @@ fn norm3(v: &[f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
-fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
-    let cfg = config(&ctx.variant);
-    let bar = progress(RUNS as u64, "vector-ekf");
-    let results: Vec<RunResult> = (0..RUNS)
-        .into_par_iter()
-        .map(|r| {
-            let out = one_run(cfg, ctx.seed, r);
-            bar.inc(1);
-            out
-        })
-        .collect::<anyhow::Result<_>>()?;
-    bar.finish_and_clear();
+crate::metrics! {
+    /// Metrics of `vector-ekf`.
+    pub struct Metrics {
+        /// Attitude error RMS (rotation vector), second half of every run, f32 filter.
+        #[metric(unit = "rad")] pub rotvec_rms_rad: f64,
+        /// NEES averaged over runs and epochs (6 for a consistent filter).
+        #[metric(unit = "")] pub nees_mean: f64,
+        /// Monte Carlo runs.
+        #[metric(unit = "")] pub runs: usize,
+        /// Degrees of freedom of the NEES.
+        #[metric(unit = "")] pub nees_dof: usize,
+        /// 95 % interval of the run-averaged NEES of a consistent filter.
+        #[metric(unit = "")] pub nees_interval_95: [f64; 2],
+        /// Fraction of epochs whose run-averaged NEES lies inside that interval.
+        #[metric(unit = "")] pub nees_epochs_inside_95: f64,
+        /// RMS of the filter's own predicted attitude σ (norm over the axes), second half.
+        #[metric(unit = "rad")] pub predicted_rms_rad: f64,
+        /// Attitude error RMS of the same filter in f64 on the same data.
+        #[metric(unit = "rad")] pub rotvec_rms_rad_f64: f64,
+        /// Largest angle between the f32 and f64 estimates over all runs.
+        #[metric(unit = "rad")] pub f32_vs_f64_max_rad: f64,
+        /// Fraction of measurements the NIS gate accepted.
+        #[metric(unit = "")] pub accepted_fraction: f64,
+    }
+}
 
+/// The pooled statistics of the runs.
+struct Pooled {
+    err32: Vec<f64>,
+    err64: Vec<f64>,
+    predicted: Vec<f64>,
+    nees_all: Vec<f64>,
+    nees_by_epoch: Vec<f64>,
+    interval: (f64, f64),
+    inside: f64,
+    accepted: f64,
+    f32_vs_f64: f64,
+}
+
+/// Errors, predicted σ and NEES over the second half of every run (NEES: all epochs).
+fn pool(results: &[RunResult]) -> Pooled {
     let steps = results[0].f32_epochs.len();
     let half = steps / 2;
     let errors = |pick: fn(&RunResult) -> &Vec<Epoch>| -> Vec<f64> {
@@ -320,8 +351,6 @@ fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
             .flat_map(|r| pick(r)[half..].iter().map(|e| norm3(&e.err)))
             .collect()
     };
-    let err32 = errors(|r| &r.f32_epochs);
-    let err64 = errors(|r| &r.f64_epochs);
     let predicted: Vec<f64> = results
         .iter()
         .flat_map(|r| r.f32_epochs[half..].iter().map(|e| norm3(&e.sigma)))
@@ -330,7 +359,7 @@ fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
         .iter()
         .flat_map(|r| r.f32_epochs.iter().map(|e| e.nees))
         .collect();
-    let (lo, hi) = stats::average_chi_square_interval(6, RUNS, 0.05);
+    let (lo, hi) = stats::average_chi_square_interval(NEES_DOF, RUNS, NEES_ALPHA);
     let nees_by_epoch: Vec<f64> = (0..steps)
         .map(|k| results.iter().map(|r| r.f32_epochs[k].nees).sum::<f64>() / RUNS as f64)
         .collect();
@@ -345,112 +374,154 @@ fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
         .filter(|e| e.accepted)
         .count() as f64
         / (RUNS * steps) as f64;
-    let f32_vs_f64 = results.iter().fold(0.0f64, |m, r| m.max(r.f32_vs_f64_max));
+    Pooled {
+        err32: errors(|r| &r.f32_epochs),
+        err64: errors(|r| &r.f64_epochs),
+        predicted,
+        nees_all,
+        nees_by_epoch,
+        interval: (lo, hi),
+        inside,
+        accepted,
+        f32_vs_f64: results.iter().fold(0.0f64, |m, r| m.max(r.f32_vs_f64_max)),
+    }
+}
 
-    let mut outcome = Outcome::default();
-    outcome
-        .metric("rotvec_rms_rad", stats::rms(&err32))
-        .metric("nees_mean", stats::mean(&nees_all))
-        .metric("runs", RUNS)
-        .metric("nees_dof", 6)
-        .metric("nees_interval_95", json!([lo, hi]))
-        .metric("nees_epochs_inside_95", inside)
-        .metric("predicted_rms_rad", stats::rms(&predicted))
-        .metric("rotvec_rms_rad_f64", stats::rms(&err64))
-        .metric("f32_vs_f64_max_rad", f32_vs_f64)
-        .metric("accepted_fraction", accepted);
-    outcome.paper = Value::Null;
-    outcome.summary = vec![
-        format!(
-            "{RUNS} runs x {DURATION} s at {} Hz, two vector measurements (σ = {SIGMA_V}), rate random walk {SIGMA_RW} rad/s/√s",
-            1.0 / DT
-        ),
-        format!(
-            "attitude error RMS (2nd half): f32 {:.3e} rad, f64 {:.3e} rad, filter-predicted {:.3e} rad",
-            stats::rms(&err32),
-            stats::rms(&err64),
-            stats::rms(&predicted)
-        ),
-        format!(
-            "NEES mean {:.3} (6 if consistent); run-averaged NEES inside its 95 % interval [{lo:.2}, {hi:.2}] at {:.1} % of epochs",
-            stats::mean(&nees_all),
-            100.0 * inside
-        ),
-    ];
+impl Pooled {
+    fn metrics(&self) -> Metrics {
+        Metrics {
+            rotvec_rms_rad: stats::rms(&self.err32),
+            nees_mean: stats::mean(&self.nees_all),
+            runs: RUNS,
+            nees_dof: NEES_DOF,
+            nees_interval_95: [self.interval.0, self.interval.1],
+            nees_epochs_inside_95: self.inside,
+            predicted_rms_rad: stats::rms(&self.predicted),
+            rotvec_rms_rad_f64: stats::rms(&self.err64),
+            f32_vs_f64_max_rad: self.f32_vs_f64,
+            accepted_fraction: self.accepted,
+        }
+    }
 
+    fn summary(&self) -> Vec<String> {
+        let (lo, hi) = self.interval;
+        vec![
+            format!(
+                "{RUNS} runs x {DURATION} s at {} Hz, two vector measurements (σ = {SIGMA_V}), rate random walk {SIGMA_RW} rad/s/√s",
+                1.0 / DT
+            ),
+            format!(
+                "attitude error RMS (2nd half): f32 {:.3e} rad, f64 {:.3e} rad, filter-predicted {:.3e} rad",
+                stats::rms(&self.err32),
+                stats::rms(&self.err64),
+                stats::rms(&self.predicted)
+            ),
+            format!(
+                "NEES mean {:.3} (6 if consistent); run-averaged NEES inside its 95 % interval [{lo:.2}, {hi:.2}] at {:.1} % of epochs",
+                stats::mean(&self.nees_all),
+                100.0 * self.inside
+            ),
+        ]
+    }
+}
+
+fn run(cfg: &Config, ctx: &RunContext) -> anyhow::Result<Outcome> {
+    let cfg = *cfg;
+    let bar = progress(RUNS as u64, "vector-ekf");
+    let results: Vec<RunResult> = (0..RUNS)
+        .into_par_iter()
+        .map(|r| {
+            let out = one_run(cfg, ctx.seed, r);
+            bar.inc(1);
+            out
+        })
+        .collect::<anyhow::Result<_>>()?;
+    bar.finish_and_clear();
+    let pooled = pool(&results);
+    let mut outcome = Outcome::new(&pooled.metrics())?;
+    outcome.summary = pooled.summary();
     if let Some(dir) = &ctx.out_dir {
-        let run0 = &results[0].f32_epochs;
-        let csv = dir.join("vector_ekf_run0.csv");
-        write_csv(
-            &csv,
-            &[
-                "t_s",
-                "err_x_rad",
-                "err_y_rad",
-                "err_z_rad",
-                "sigma_x_rad",
-                "sigma_y_rad",
-                "sigma_z_rad",
-                "nees",
-            ],
-            run0.iter().map(|e| {
-                [
-                    e.t, e.err[0], e.err[1], e.err[2], e.sigma[0], e.sigma[1], e.sigma[2], e.nees,
-                ]
-            }),
-        )?;
-        let panels: Vec<Panel> = ["x", "y", "z"]
-            .iter()
-            .enumerate()
-            .map(|(i, axis)| Panel {
-                y_label: format!("δθ_{axis} (rad)"),
-                series: vec![
-                    Series::line(
-                        format!("error {axis}"),
-                        run0.iter().map(|e| (e.t, e.err[i])).collect(),
-                        0,
-                    ),
-                    Series::bound(
-                        "+3σ",
-                        run0.iter().map(|e| (e.t, 3.0 * e.sigma[i])).collect(),
-                        1,
-                    ),
-                    Series::bound(
-                        "-3σ",
-                        run0.iter().map(|e| (e.t, -3.0 * e.sigma[i])).collect(),
-                        1,
-                    ),
-                ],
-            })
-            .collect();
-        let png = dir.join("vector_ekf_error.png");
-        plot_panels(
-            &png,
-            "vector-ekf: attitude error of run 0 with ±3σ",
-            "time (s)",
-            &panels,
-        )?;
-        let nees_png = dir.join("vector_ekf_nees.png");
-        let t: Vec<f64> = run0.iter().map(|e| e.t).collect();
-        plot_lines(
-            &nees_png,
-            &format!("vector-ekf: NEES averaged over {RUNS} runs, 95 % band"),
-            "time (s)",
-            "average NEES",
-            vec![
-                Series::line(
-                    "average NEES",
-                    t.iter()
-                        .zip(&nees_by_epoch)
-                        .map(|(&a, &b)| (a, b))
-                        .collect(),
-                    0,
-                ),
-                Series::bound("lower 95 %", t.iter().map(|&a| (a, lo)).collect(), 1),
-                Series::bound("upper 95 %", t.iter().map(|&a| (a, hi)).collect(), 1),
-            ],
-        )?;
-        outcome.files = vec![csv, png, nees_png];
+        outcome.files = write_files(dir, &results[0].f32_epochs, &pooled)?;
     }
     Ok(outcome)
+}
+
+/// Run 0's errors as CSV and plot, and the run-averaged NEES with its band.
+fn write_files(
+    dir: &std::path::Path,
+    run0: &[Epoch],
+    pooled: &Pooled,
+) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    let csv = dir.join("vector_ekf_run0.csv");
+    write_csv(
+        &csv,
+        &[
+            "t_s",
+            "err_x_rad",
+            "err_y_rad",
+            "err_z_rad",
+            "sigma_x_rad",
+            "sigma_y_rad",
+            "sigma_z_rad",
+            "nees",
+        ],
+        run0.iter().map(|e| {
+            [
+                e.t, e.err[0], e.err[1], e.err[2], e.sigma[0], e.sigma[1], e.sigma[2], e.nees,
+            ]
+        }),
+    )?;
+    let panels: Vec<Panel> = ["x", "y", "z"]
+        .iter()
+        .enumerate()
+        .map(|(i, axis)| Panel {
+            y_label: format!("δθ_{axis} (rad)"),
+            series: vec![
+                Series::line(
+                    format!("error {axis}"),
+                    run0.iter().map(|e| (e.t, e.err[i])).collect(),
+                    0,
+                ),
+                Series::bound(
+                    "+3σ",
+                    run0.iter().map(|e| (e.t, 3.0 * e.sigma[i])).collect(),
+                    1,
+                ),
+                Series::bound(
+                    "-3σ",
+                    run0.iter().map(|e| (e.t, -3.0 * e.sigma[i])).collect(),
+                    1,
+                ),
+            ],
+        })
+        .collect();
+    let png = dir.join("vector_ekf_error.png");
+    plot_panels(
+        &png,
+        "vector-ekf: attitude error of run 0 with ±3σ",
+        "time (s)",
+        &panels,
+    )?;
+    let nees_png = dir.join("vector_ekf_nees.png");
+    let t: Vec<f64> = run0.iter().map(|e| e.t).collect();
+    let (lo, hi) = pooled.interval;
+    plot_lines(
+        &nees_png,
+        &format!("vector-ekf: NEES averaged over {RUNS} runs, 95 % band"),
+        "time (s)",
+        "average NEES",
+        vec![
+            Series::line(
+                "average NEES",
+                t.iter()
+                    .zip(&pooled.nees_by_epoch)
+                    .map(|(&a, &b)| (a, b))
+                    .collect(),
+                0,
+            ),
+            Series::bound("lower 95 %", t.iter().map(|&a| (a, lo)).collect(), 1),
+            Series::bound("upper 95 %", t.iter().map(|&a| (a, hi)).collect(), 1),
+        ],
+    )?;
+    Ok(vec![csv, png, nees_png])
 }

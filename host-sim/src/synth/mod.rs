@@ -7,9 +7,12 @@
 //!   with the core's decoder.
 //! * [`file`](mod@file): CS8/CS16 (and the other formats') files, written and read back.
 //! * [`codes`]: the synthesizer's own C/A code generator.
+//! * [`lnav`]: the LNAV navigation message (ephemerides from the almanac's orbits, subframes
+//!   1–5 with parity, the data bit of any satellite at any time).
 
 pub mod codes;
 pub mod file;
+pub mod lnav;
 pub mod quantize;
 pub mod scene;
 

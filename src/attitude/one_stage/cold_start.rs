@@ -25,8 +25,8 @@
 
 use nalgebra::{Complex, Vector3};
 
+use crate::attitude::one_stage::OneStageError;
 use crate::attitude::range_model::PhaseSatellite;
-use crate::OneStageError;
 
 use super::input::SatelliteObservation;
 
@@ -40,6 +40,24 @@ pub struct PhaseDifferences {
     /// `Σ 10^(C/N0 / 10)`, Hz.
     cn0_sum: f32,
     epochs: u32,
+}
+
+/// Summarised on purpose: the sums as `(re, im)` pairs (num-complex has no defmt support).
+#[cfg(feature = "defmt")]
+impl defmt::Format for PhaseDifferences {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        let [b, c] = self.sum;
+        defmt::write!(
+            f,
+            "PhaseDifferences {{ id: {=u8}, epochs: {=u32}, B: ({=f32}, {=f32}), C: ({=f32}, {=f32}) }}",
+            self.id,
+            self.epochs,
+            b.re,
+            b.im,
+            c.re,
+            c.im
+        );
+    }
 }
 
 impl PhaseDifferences {

@@ -114,6 +114,12 @@ pub struct OneStageConfig<T = f32> {
 }
 
 impl<T: Real> OneStageConfig<T> {
+    /// The state dimension `N` of a [`OneStageFilter`](super::OneStageFilter) for this
+    /// configuration: twice the estimated angles, plus two with line biases.
+    pub fn state_dimension(&self) -> usize {
+        super::layout::dimension_of(self)
+    }
+
     /// GPS L1 C/A (λ = 0.1903 m, T = 1 ms), all three angles, no bias states, bandwidth
     /// `loop_bandwidth_hz`, bias loop 0.05 Hz, `κ = 0.5`, default lock detector.
     pub fn gps_l1(mode: FilterMode, loop_bandwidth_hz: T) -> Self {

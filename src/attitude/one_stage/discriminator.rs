@@ -83,6 +83,7 @@ pub fn coherent_sum<T: Real>(z: &[Complex<T>; 3], psi: &Vector3<T>) -> Complex<T
 
 /// Everything one satellite contributes at one predicted phase vector `ψ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SatelliteTerms<T = f32> {
     /// `X_i²` of eq. (20), in noise units (`σ = 1`).
     pub x_squared: T,

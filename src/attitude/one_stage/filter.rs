@@ -1,21 +1,26 @@
 //! The one-stage filter on `X = [α; α̇]` (plus optional line biases): prediction (7)/(10) and
 //! the per-epoch discriminators; the two update forms are in `update.rs`.
 
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
 
 use crate::ekf::Ekf;
 use crate::geometry::Paper003Angles;
-use crate::{OneStageError, Real};
+use crate::Real;
 
 use super::config::{FilterMode, OneStageConfig};
 use super::information::{epoch_information, EpochInformation, PARAMETERS};
 use super::input::{CheckedObservation, SatelliteObservation, MAX_SATELLITES};
 use super::layout::StateLayout;
-use super::linalg::{el, regularized_solve, set, wrap};
 use super::lock::{LockDetector, LockStatus};
 use super::phase::PhaseModel;
 use super::prior::Prior;
 use crate::attitude::array::AntennaArray;
+use crate::attitude::array::ArrayError;
+use crate::ekf::FilterError;
+use crate::error::{Error, ErrorKind};
+use crate::geometry::wrap_angle as wrap;
+use crate::geometry::GeometryError;
+use crate::linalg::regularized_solve;
 
 /// What one epoch did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,10 +56,11 @@ pub struct EpochReport<T = f32> {
 /// (`[α, β, γ, α̇, β̇, γ̇, b_B, b_C]`, the default); see [`StateLayout`]. Angles not estimated
 /// are held at their prior values. Angles are wrapped to `(−π, π]`.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct OneStageFilter<T = f32, const N: usize = 8> {
     pub(super) config: OneStageConfig<T>,
     pub(super) array: AntennaArray<T>,
-    pub(super) layout: StateLayout,
+    pub(super) layout: StateLayout<T, N>,
     /// Values of the angles that are not estimated, rad.
     pub(super) held: [T; 3],
     pub(super) ekf: Ekf<N, T>,
@@ -69,7 +75,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
     ///
     /// # Errors
     /// [`OneStageError::InvalidConfig`] when [`OneStageConfig::is_valid`] fails or `N` is not
-    /// the dimension the configuration needs ([`StateLayout::dimension`]);
+    /// the dimension the configuration needs ([`OneStageConfig::state_dimension`]);
     /// [`OneStageError::DegenerateArray`] when the antennas span no plane
     /// ([`AntennaArray::check_spans_plane`]); the errors of the prior
     /// ([`OneStageError::NonFiniteInput`], [`OneStageError::InvalidCovariance`]).
@@ -78,10 +84,10 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         array: AntennaArray<T>,
         prior: &Prior<T>,
     ) -> Result<Self, OneStageError> {
-        let layout = StateLayout::of(&config);
-        if !config.is_valid() || layout.dimension != N {
-            return Err(OneStageError::InvalidConfig);
-        }
+        let layout = match StateLayout::of(&config) {
+            Some(layout) if config.is_valid() => layout,
+            _ => return Err(OneStageError::InvalidConfig),
+        };
         array.check_spans_plane()?;
         let (ekf, held) = Self::initial_state(&layout, prior, config.line_bias_states)?;
         Ok(Self {
@@ -124,63 +130,43 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         if !(variance > T::zero()) {
             return Err(OneStageError::InvalidCovariance);
         }
-        let mut p = *self.ekf.covariance();
-        for idx in self.layout.parameter.iter().skip(3).flatten() {
-            for k in 0..N {
-                set(&mut p, *idx, k, T::zero());
-                set(&mut p, k, *idx, T::zero());
-            }
-            set(&mut p, *idx, *idx, variance);
-        }
-        self.ekf
-            .set_covariance(p)
-            .map_err(|_| OneStageError::InvalidCovariance)
+        // P ← K P K + v S_bᵀS_b with K = I − S_bᵀS_b: the bias rows and columns cleared
+        let sb = self.layout.biases.transpose() * self.layout.biases;
+        let keep = SMatrix::<T, N, N>::identity() - sb;
+        let p = keep * self.ekf.covariance() * keep + sb * variance;
+        self.ekf.set_covariance(p).map_err(OneStageError::from)
     }
 
     fn initial_state(
-        layout: &StateLayout,
+        layout: &StateLayout<T, N>,
         prior: &Prior<T>,
         with_bias: bool,
     ) -> Result<(Ekf<N, T>, [T; 3]), OneStageError> {
         prior.check(with_bias)?;
-        let mut x = SVector::<T, N>::zeros();
-        let mut p = SMatrix::<T, N, N>::identity();
         let a = [prior.angles.alpha, prior.angles.beta, prior.angles.gamma].map(wrap);
-        let r = [prior.rates.x, prior.rates.y, prior.rates.z];
-        for i in 0..3 {
-            let (Some(pi), Some(ri)) = (layout.parameter[i], layout.rate[i]) else {
-                continue;
-            };
-            set(&mut x, pi, 0, a[i]);
-            set(&mut x, ri, 0, r[i]);
-            for j in 0..3 {
-                if let (Some(pj), Some(rj)) = (layout.parameter[j], layout.rate[j]) {
-                    set(&mut p, pi, pj, el(&prior.angle_covariance, i, j));
-                    set(&mut p, ri, rj, el(&prior.rate_covariance, i, j));
-                }
-            }
-        }
-        for (k, (&b, &v)) in prior
-            .line_bias
-            .iter()
-            .zip(prior.line_bias_variance.iter())
-            .enumerate()
-        {
-            if let Some(Some(idx)) = layout.parameter.get(3 + k) {
-                set(&mut x, *idx, 0, b);
-                set(&mut p, *idx, *idx, v);
-            }
-        }
-        let ekf = Ekf::new(x, p).map_err(|_| OneStageError::InvalidCovariance)?;
+        let (sa, sr, sb) = (&layout.angles, &layout.rates, &layout.biases);
+        let x = sa.transpose() * Vector3::from(a)
+            + sr.transpose() * prior.rates
+            + sb.transpose() * Vector2::from(prior.line_bias);
+        let p = sa.transpose() * prior.angle_covariance * sa
+            + sr.transpose() * prior.rate_covariance * sr
+            + StateLayout::spread(sb, &Vector2::from(prior.line_bias_variance));
+        let ekf = Ekf::new(x, p).map_err(|e| match e {
+            // the prior was checked finite above: what the toolkit refuses is its covariance
+            FilterError::InvalidCovariance => OneStageError::InvalidCovariance,
+            e => OneStageError::Filter(e),
+        })?;
         Ok((ekf, a))
     }
 
     /// The angles (α, β, γ) of a state vector: estimated ones from it, held ones as held.
     pub(super) fn angles_of(&self, x: &SVector<T, N>) -> [T; 3] {
+        let estimated = self.layout.angles * x;
         let mut a = self.held;
-        for (ai, idx) in a.iter_mut().zip(self.layout.parameter.iter()) {
-            if let Some(v) = idx.and_then(|i| x.get(i)) {
-                *ai = *v;
+        let active = self.layout.active();
+        for ((ai, &on), &v) in a.iter_mut().zip(active.iter()).zip(estimated.iter()) {
+            if on {
+                *ai = v;
             }
         }
         a
@@ -188,27 +174,15 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
 
     /// The line biases (`b_B`, `b_C`) of a state vector (zero when not estimated).
     fn biases_of(&self, x: &SVector<T, N>) -> [T; 2] {
-        let get = |k: usize| {
-            self.layout
-                .parameter
-                .get(k)
-                .copied()
-                .flatten()
-                .and_then(|i| x.get(i).copied())
-                .unwrap_or_else(T::zero)
-        };
-        [get(3), get(4)]
+        let b = self.layout.biases * x;
+        [b.x, b.y]
     }
 
-    /// Transition `F` of eq. (8): `angle ← angle + T · rate` for the estimated angles.
+    /// Transition `F` of eq. (8): `angle ← angle + T · rate` for the estimated angles,
+    /// `F = I + T S_αᵀ S_ω`.
     pub(super) fn transition(&self) -> SMatrix<T, N, N> {
-        let mut f = SMatrix::<T, N, N>::identity();
-        for (p, r) in self.layout.parameter.iter().zip(self.layout.rate.iter()) {
-            if let (Some(p), Some(r)) = (p, r) {
-                set(&mut f, *p, *r, self.config.epoch_s);
-            }
-        }
-        f
+        SMatrix::<T, N, N>::identity()
+            + self.layout.angles.transpose() * self.layout.rates * self.config.epoch_s
     }
 
     /// One epoch: prediction (eq. (10)), the discriminators at the predicted state, the update
@@ -238,15 +212,10 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
             FilterMode::GaussianApproximation => next.gaussian_update(&f, &x_pred, &info)?,
             FilterMode::ConstantGain => next.constant_gain_update(&x_pred, &info, &normalized)?,
         }
-        let mut x = *next.ekf.state();
-        for idx in self.layout.parameter.iter().take(3).flatten() {
-            if let Some(v) = x.get_mut(*idx) {
-                *v = wrap(*v);
-            }
-        }
-        next.ekf
-            .set_state(x)
-            .map_err(|_| OneStageError::Numerical)?;
+        let x = *next.ekf.state();
+        let angles = self.layout.angles * x;
+        let x = x + self.layout.angles.transpose() * (angles.map(wrap) - angles);
+        next.ekf.set_state(x)?;
         next.lock.update(
             info.coherent_power,
             info.aligned_power,
@@ -283,6 +252,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
             let c = obs.check(self.config.epoch_s)?;
             checked
                 .push(c)
+                // (the item handed back is dropped: the epoch is refused as a whole)
                 .map_err(|_| OneStageError::TooManySatellites)?;
         }
         let [a, b, g] = self.angles_of(x);
@@ -325,7 +295,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
     }
 
     /// Where each quantity sits in [`Self::estimate`]'s state vector.
-    pub fn layout(&self) -> &StateLayout {
+    pub fn layout(&self) -> &StateLayout<T, N> {
         &self.layout
     }
 
@@ -342,12 +312,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
 
     /// The estimated rates (α̇, β̇, γ̇), rad/s (zero for held angles).
     pub fn rates(&self) -> Vector3<T> {
-        let x = self.ekf.state();
-        Vector3::from(
-            self.layout
-                .rate
-                .map(|r| r.and_then(|i| x.get(i).copied()).unwrap_or_else(T::zero)),
-        )
+        self.layout.rates * self.ekf.state()
     }
 
     /// The estimated line biases `b_B`, `b_C`, rad (zero when not estimated).
@@ -361,14 +326,8 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         if self.config.mode != FilterMode::GaussianApproximation {
             return None;
         }
-        let p = self.ekf.covariance();
-        let idx = self.layout.parameter;
-        Some(Matrix3::from_fn(|i, j| {
-            match (idx.get(i).copied().flatten(), idx.get(j).copied().flatten()) {
-                (Some(a), Some(b)) => el(p, a, b),
-                _ => T::zero(),
-            }
-        }))
+        let s = &self.layout.angles;
+        Some(s * self.ekf.covariance() * s.transpose())
     }
 
     /// The state (ordered as [`Self::layout`]) and, in the Gaussian mode, its covariance.
@@ -391,6 +350,82 @@ fn mask<T: Real>(info: &mut EpochInformation<T>, active: &[bool; PARAMETERS]) {
             info.observed.column_mut(k).fill(T::zero());
             info.expected.row_mut(k).fill(T::zero());
             info.expected.column_mut(k).fill(T::zero());
+        }
+    }
+}
+
+/// Errors of the one-stage attitude filter ([`crate::attitude::one_stage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum OneStageError {
+    /// An observation, prior, configuration or antenna position held NaN or infinity.
+    #[error("non-finite one-stage filter input")]
+    NonFiniteInput,
+    /// A configuration value is outside its domain: a non-positive wavelength, epoch or
+    /// bandwidth, a negative process noise, a lock threshold outside `(0, 1]`, no estimated
+    /// angle.
+    #[error("invalid one-stage filter configuration")]
+    InvalidConfig,
+    /// The antenna array is degenerate: two antennas coincide or all three are collinear.
+    #[error("antenna array is degenerate (coincident or collinear)")]
+    DegenerateArray,
+    /// An observation is unusable: a line of sight that is not a unit vector (length off by more
+    /// than 1e-3), a noise variance that is not positive, or a C/N0 outside 0..=90 dB-Hz.
+    #[error("unusable satellite observation")]
+    InvalidObservation,
+    /// More satellites in one epoch than [`MAX_SATELLITES`](crate::attitude::one_stage::MAX_SATELLITES).
+    #[error("too many satellites in one epoch")]
+    TooManySatellites,
+    /// A prior covariance is not symmetric positive definite.
+    #[error("prior covariance is not positive definite")]
+    InvalidCovariance,
+    /// The prior attitude is at the gimbal lock of the paper's angles (`cos β` below 1e-3),
+    /// where a rotation-vector covariance cannot be mapped onto α, β, γ.
+    #[error("prior attitude at the gimbal lock of the paper's angles")]
+    GimbalLock,
+    /// A snapshot solution offered as the prior is not of
+    /// [`SnapshotQuality::Good`](crate::attitude::snapshot::SnapshotQuality::Good) (its
+    /// residuals failed the χ² test or its iteration did not converge).
+    #[error("snapshot solution not good enough for a prior")]
+    UnusableSnapshot,
+    /// The filter step produced non-finite numbers or lost definiteness from finite input; the
+    /// filter is unchanged.
+    #[error("one-stage filter step failed numerically")]
+    Numerical,
+    /// The Kalman filter toolkit refused a step (prediction, update or state) from finite
+    /// input: overflow or loss of definiteness.
+    #[error("filter step refused")]
+    Filter(#[from] FilterError),
+    /// A rotation handed to the filter (an anchor, a prior attitude) could not be normalized
+    /// or is not a rotation.
+    #[error("rotation refused")]
+    Geometry(#[from] GeometryError),
+}
+
+impl Error for OneStageError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFiniteInput => ErrorKind::NonFinite,
+            Self::InvalidConfig
+            | Self::DegenerateArray
+            | Self::InvalidObservation
+            | Self::TooManySatellites => ErrorKind::InvalidInput,
+            Self::InvalidCovariance => ErrorKind::NotPositiveDefinite,
+            Self::GimbalLock => ErrorKind::Unobservable,
+            Self::UnusableSnapshot => ErrorKind::InvalidInput,
+            Self::Numerical => ErrorKind::Numerical,
+            Self::Geometry(e) => e.kind(),
+            Self::Filter(e) => e.kind(),
+        }
+    }
+}
+
+impl From<ArrayError> for OneStageError {
+    fn from(e: ArrayError) -> Self {
+        match e {
+            ArrayError::NonFinite => Self::NonFiniteInput,
+            ArrayError::CoincidentAntennas | ArrayError::CollinearAntennas => Self::DegenerateArray,
         }
     }
 }

@@ -16,6 +16,7 @@ pub const PARAMETERS: usize = 5;
 
 /// The epoch's sums over satellites, in the parameter order α, β, γ, `b_B`, `b_C` (radians).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EpochInformation<T = f32> {
     /// `∂F/∂θ`: for the angles the discriminator `u_α = (∂Ψ/∂α)ᵀ u_ψ` of eq. (32) (the `2π/λ`
     /// included), for the biases `Σ_i ∂F_i/∂ψ_{B,i}` and `Σ_i ∂F_i/∂ψ_{C,i}`. 1/rad.
@@ -41,12 +42,12 @@ pub struct EpochInformation<T = f32> {
 impl<T: Real> EpochInformation<T> {
     /// The angle block `J_αα` of [`Self::expected`], 1/rad².
     pub fn expected_angles(&self) -> Matrix3<T> {
-        Matrix3::from_fn(|i, j| self.expected.get((i, j)).copied().unwrap_or_else(T::zero))
+        self.expected.fixed_view::<3, 3>(0, 0).into_owned()
     }
 
     /// The angle part `u_α` of [`Self::gradient`] (eq. (32)), 1/rad.
     pub fn angle_gradient(&self) -> Vector3<T> {
-        Vector3::from_fn(|i, _| self.gradient.get(i).copied().unwrap_or_else(T::zero))
+        self.gradient.fixed_rows::<3>(0).into_owned()
     }
 }
 

@@ -2,7 +2,8 @@
 
 use nalgebra::{Complex, Vector3};
 
-use crate::{real, OneStageError, Real};
+use crate::attitude::one_stage::OneStageError;
+use crate::{real, Real};
 
 use super::discriminator::PromptIq;
 

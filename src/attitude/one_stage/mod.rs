@@ -12,7 +12,7 @@
 //! | Step | Paper | Here |
 //! |---|---|---|
 //! | Rotation `U(α) = R_z(γ) R_y(β) R_x'(α)` | (2) | [`crate::geometry::Paper003Angles`], [`paper003_partials`] |
-//! | Antenna phases `ψ_{P,i}`, Jacobian `∂Ψ/∂α` | (4), (24)–(28) | [`AntennaArray`], [`PhaseModel`] |
+//! | Antenna phases `ψ_{P,i}`, Jacobian `∂Ψ/∂α` | (4), (24)–(28) | [`AntennaArray`](crate::attitude::array::AntennaArray), [`PhaseModel`] |
 //! | Coherent sum and `X_i²` | (18), (20) | [`coherent_sum`], [`satellite_terms`] |
 //! | Phase discriminators `(I₁/I₀)(aX) a ∂X/∂ψ` | (22), (23) | [`satellite_terms`], [`BesselRatio`] |
 //! | Angle discriminator `u_α = (∂Ψ/∂α)ᵀ u_ψ` | (32) | [`EpochInformation::gradient`] |
@@ -28,10 +28,10 @@
 //!
 //! # From the signal chain (samples → attitude)
 //!
-//! The [`adapter`] turns the tracking channels' [`TrackingEpoch`](crate::tracking::TrackingEpoch)s
-//! into observations ([`ObservationAdapter`]: antenna mapping, sign of Q, per-antenna noise
-//! normalization from the noise taps, lock and C/N0 gating) and groups them into filter epochs
-//! ([`EpochClock`]). A cold start averages the inter-antenna phases ([`PhaseDifferences`]),
+//! The receiver's adapter ([`crate::receiver::ObservationAdapter`]) turns the tracking
+//! channels' [`TrackingEpoch`](crate::tracking::TrackingEpoch)s into observations (antenna
+//! mapping, sign of Q, per-antenna noise normalization from the noise taps, lock and C/N0
+//! gating) and groups them into filter epochs ([`crate::receiver::EpochClock`]). A cold start averages the inter-antenna phases ([`PhaseDifferences`]),
 //! solves them with the snapshot solver's ambiguity resolver and starts from
 //! [`Prior::from_snapshot`]. Per receiver:
 //!
@@ -82,9 +82,6 @@
 //! information is independent of the biases), which the filter recovers over time because the
 //! biases are constant while the attitude moves.
 
-pub mod adapter;
-#[cfg(test)]
-mod adapter_tests;
 pub mod bessel;
 mod cold_start;
 mod config;
@@ -93,7 +90,6 @@ mod filter;
 mod information;
 mod input;
 mod layout;
-mod linalg;
 pub mod lock;
 mod phase;
 mod prior;
@@ -103,11 +99,6 @@ mod update;
 #[cfg(test)]
 mod tests;
 
-pub use crate::attitude::array::{Antenna, AntennaArray};
-pub use adapter::{
-    observation_from_epoch, AdapterConfig, AntennaMapping, EpochClock, NoiseFloor,
-    ObservationAdapter, QuadratureSign,
-};
 pub use bessel::BesselRatio;
 pub use cold_start::PhaseDifferences;
 pub use config::{EstimatedAngles, FilterMode, OneStageConfig, ProcessNoise, GPS_L1_WAVELENGTH_M};
@@ -115,7 +106,7 @@ pub use discriminator::{
     coherent_sum, difference_basis, floored_plane_curvature, satellite_terms, PromptIq,
     SatelliteTerms,
 };
-pub use filter::{EpochReport, OneStageFilter};
+pub use filter::{EpochReport, OneStageError, OneStageFilter};
 pub use information::{EpochInformation, PARAMETERS};
 pub use input::{SatelliteObservation, MAX_SATELLITES};
 pub use layout::StateLayout;

@@ -45,6 +45,7 @@ pub(crate) fn paper003_rotation_and_partials<T: Real>(
 /// positive when the antenna is nearer the satellite than `O_c`, i.e. its carrier arrives
 /// earlier and leads.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PhaseModel<T = f32> {
     wavenumber: T,
     positions: [Vector3<T>; 3],

@@ -3,14 +3,16 @@
 
 use nalgebra::{Cholesky, Matrix3, Vector3};
 
+use crate::attitude::one_stage::OneStageError;
 use crate::attitude::snapshot::{SnapshotQuality, SnapshotSolution};
 use crate::geometry::{vee, Paper003Angles};
-use crate::{real, OneStageError, Real};
+use crate::{real, Real};
 
 use super::phase::paper003_partials;
 
 /// Mean and covariance the filter starts from.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Prior<T = f32> {
     /// The attitude angles α, β, γ of eq. (2), rad.
     pub angles: Paper003Angles<T>,
@@ -65,7 +67,7 @@ impl<T: Real> Prior<T> {
         {
             return Err(OneStageError::NonFiniteInput);
         }
-        let angles = Paper003Angles::from_dcm(c_rb).map_err(|_| OneStageError::NonFiniteInput)?;
+        let angles = Paper003Angles::from_dcm(c_rb)?;
         if angles.beta.cos().abs() < real(1e-3) {
             return Err(OneStageError::GimbalLock);
         }

@@ -4,8 +4,9 @@
 use nalgebra::{SMatrix, Vector3};
 
 use super::*;
+use crate::attitude::array::AntennaArray;
+use crate::attitude::one_stage::OneStageError;
 use crate::geometry::Paper003Angles;
-use crate::OneStageError;
 
 fn los(az_deg: f64, el_deg: f64) -> [f64; 3] {
     let (az, el) = (az_deg.to_radians(), el_deg.to_radians());

@@ -1,14 +1,16 @@
 //! The two update forms of the one-stage filter: the Gaussian approximation of eqs. (9)–(12)
 //! and the constant-gain loop of the paper's simulation.
 
-use nalgebra::{SMatrix, SVector, Vector3};
+use nalgebra::{SMatrix, SVector, Vector2, Vector3};
 
-use crate::{real, OneStageError, Real};
+use crate::attitude::one_stage::OneStageError;
+use crate::{real, Real};
 
 use super::config::ProcessNoise;
 use super::filter::OneStageFilter;
 use super::information::{EpochInformation, PARAMETERS};
-use super::linalg::{add, el, marginal_information, psd_factor, regularized_solve, set};
+use super::layout::StateLayout;
+use crate::linalg::{marginal_information, psd_factor, regularized_solve};
 
 impl<T: Real, const N: usize> OneStageFilter<T, N> {
     /// Eqs. (11), (12), (9): `D̃ = F D Fᵀ + G D_ξ Gᵀ`, `D⁻¹ = D̃⁻¹ + cᵀ W c` with
@@ -22,35 +24,22 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         info: &EpochInformation<T>,
     ) -> Result<(), OneStageError> {
         let q = self.process_noise(info);
-        self.ekf
-            .predict_to(x_pred, f, &q)
-            .map_err(|_| OneStageError::Numerical)?;
+        self.ekf.predict_to(x_pred, f, &q)?;
         if info.satellites == 0 {
             return Ok(());
         }
         let l = psd_factor(&info.observed);
-        let mut h = SMatrix::<T, PARAMETERS, N>::zeros();
-        let mut ct_u = SVector::<T, N>::zeros();
-        for (k, idx) in self.layout.parameter.iter().enumerate() {
-            if let Some(col) = *idx {
-                // H = L̃ᵀ c: column `col` of H is column k of L̃ᵀ, i.e. row k of L̃
-                for r in 0..PARAMETERS {
-                    set(&mut h, r, col, el(&l, k, r));
-                }
-                add(&mut ct_u, col, info.gradient[k]);
-            }
-        }
-        self.ekf
-            .update(
-                &SVector::<T, PARAMETERS>::zeros(),
-                &h,
-                &SMatrix::identity(),
-                None,
-            )
-            .map_err(|_| OneStageError::Numerical)?;
+        let h: SMatrix<T, PARAMETERS, N> = l.transpose() * self.layout.c;
+        let ct_u = self.layout.c.transpose() * SVector::<T, PARAMETERS>::from(info.gradient);
+        self.ekf.update(
+            &SVector::<T, PARAMETERS>::zeros(),
+            &h,
+            &SMatrix::identity(),
+            None,
+        )?;
         // eq. (9): X̂ = X̃ + D_X cᵀ u
         let x = x_pred + self.ekf.covariance() * ct_u;
-        self.ekf.set_state(x).map_err(|_| OneStageError::Numerical)
+        Ok(self.ekf.set_state(x)?)
     }
 
     /// `G D_ξ Gᵀ` of eq. (11) for this epoch (see [`ProcessNoise`]).
@@ -90,19 +79,10 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
                 self.scheduled_psd
             }
         };
-        let mut q = SMatrix::<T, N, N>::zeros();
         // eq. (7): v_k = v_{k−1} + ξ for each estimated angle; the biases walk themselves
-        let noisy = self
-            .layout
-            .rate
-            .iter()
-            .chain(self.layout.parameter.iter().skip(3));
-        for (idx, &qk) in noisy.zip(psd.iter()) {
-            if let Some(i) = *idx {
-                set(&mut q, i, i, qk * t);
-            }
-        }
-        q
+        let [qa, qb, qg, qbb, qbc] = psd.map(|q| q * t);
+        StateLayout::spread(&self.layout.rates, &Vector3::new(qa, qb, qg))
+            + StateLayout::spread(&self.layout.biases, &Vector2::new(qbb, qbc))
     }
 
     /// The constant-gain loop: `u_n = J_T⁻¹ u`, then `α̂ = α̃ + K1 u_n`, `v̂ = ṽ + K2 u_n`,
@@ -118,23 +98,16 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         let mut x = *x_pred;
         if info.satellites > 0 {
             let (k1, k2) = self.config.loop_gains();
-            let angles = self.layout.parameter.iter().zip(self.layout.rate.iter());
-            for ((p, r), &v) in angles.zip(un_a.iter()) {
-                if let (Some(p), Some(r)) = (p, r) {
-                    add(&mut x, *p, k1 * v);
-                    add(&mut x, *r, k2 * v);
-                }
-            }
+            // (un_a is zero for angles that are not estimated: their information is masked)
+            x += self.layout.angles.transpose() * (un_a * k1)
+                + self.layout.rates.transpose() * (un_a * k2);
             if self.config.line_bias_states {
                 let kb = self.config.bias_gain();
-                let un = regularized_solve(&info.expected, &info.gradient);
-                for k in 3..PARAMETERS {
-                    if let Some(Some(i)) = self.layout.parameter.get(k) {
-                        add(&mut x, *i, kb * un[k]);
-                    }
-                }
+                let gradient = SVector::<T, PARAMETERS>::from(info.gradient);
+                let un = regularized_solve(&info.expected, &gradient);
+                x += self.layout.biases.transpose() * (Vector2::new(un[3], un[4]) * kb);
             }
         }
-        self.ekf.set_state(x).map_err(|_| OneStageError::Numerical)
+        Ok(self.ekf.set_state(x)?)
     }
 }

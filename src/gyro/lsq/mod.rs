@@ -19,15 +19,14 @@
 //! bounded one-sided Jacobi iteration), and [`LeastSquaresAccumulator::solve`] returns
 //! [`CalibrationError::Unobservable`] instead of an answer when the rank is deficient.
 
-mod jacobi;
 mod normal_equations;
 mod sqrt_information;
 
 use nalgebra::SVector;
 
-use crate::{real, CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::{real, Real};
 
-pub use jacobi::{singular_values, JACOBI_MAX_SWEEPS};
 pub use normal_equations::NormalEquations;
 pub use sqrt_information::SqrtInformation;
 
@@ -90,6 +89,7 @@ pub fn default_rank_tolerance<T: Real>() -> T {
 /// which does not depend on the units; the condition number of `U` itself is reported too
 /// (the paper's §6 figure).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ObservabilityReport<const X: usize, T = f32> {
     /// Singular values of `U` in descending order (units of the rows).
     pub singular_values: SVector<T, X>,
@@ -145,6 +145,7 @@ pub(crate) fn inverse_scales<T: Real, const X: usize>(d: &SVector<T, X>) -> SVec
 
 /// A least-squares solution.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LsqSolution<const X: usize, T = f32> {
     /// The estimate `x̂` minimizing `‖U x − Z‖²`.
     pub x: SVector<T, X>,

@@ -2,11 +2,13 @@
 
 use nalgebra::{Cholesky, SMatrix, SVector};
 
-use crate::{CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::linalg::singular_values;
+use crate::Real;
 
 use super::{
-    check_row, check_tolerance, inverse_scales, sigma0, singular_values, LeastSquaresAccumulator,
-    LsqSolution, ObservabilityReport,
+    check_row, check_tolerance, inverse_scales, sigma0, LeastSquaresAccumulator, LsqSolution,
+    ObservabilityReport,
 };
 
 /// Sequential least squares by the normal equations, as the paper accumulates them (eq. (5.8)):
@@ -18,6 +20,7 @@ use super::{
 /// below `√ε` relative cannot be told from rounding. Kept next to [`super::SqrtInformation`]
 /// (same memory) to show that difference.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct NormalEquations<const X: usize, T = f32> {
     /// `UᵀU`, upper triangle maintained (the lower one is filled at solve time).
     n: SMatrix<T, X, X>,

@@ -2,11 +2,13 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::{CalibrationError, Real};
+use crate::gyro::CalibrationError;
+use crate::linalg::singular_values;
+use crate::Real;
 
 use super::{
-    check_row, check_tolerance, inverse_scales, sigma0, singular_values, LeastSquaresAccumulator,
-    LsqSolution, ObservabilityReport,
+    check_row, check_tolerance, inverse_scales, sigma0, LeastSquaresAccumulator, LsqSolution,
+    ObservabilityReport,
 };
 
 /// Sequential least squares in square-root information form.
@@ -22,6 +24,7 @@ use super::{
 /// next with [`Self::marginalize`] (for example the gyro errors `c`, when a long calibration is
 /// re-anchored on a new reference epoch and `w₀` starts afresh).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SqrtInformation<const X: usize, T = f32> {
     r: SMatrix<T, X, X>,
     y: SVector<T, X>,

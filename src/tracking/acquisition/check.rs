@@ -4,8 +4,9 @@
 
 #[cfg(doc)]
 use super::CROSS_CORRELATION_MARGIN;
-use super::{check_inputs, input_mean, Acquisition, AcquisitionConfig, SearchResult};
-use crate::error::AcquisitionError;
+use super::{
+    check_inputs, input_mean, Acquisition, AcquisitionConfig, AcquisitionError, SearchResult,
+};
 use crate::signal::ca_code::{Prn, CA_CODE_LENGTH};
 use crate::tracking::xcorr::{
     cross_correlation_source, CrossCorrelationTest, SignalProbe, MAX_OTHERS,

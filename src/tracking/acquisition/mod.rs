@@ -65,7 +65,7 @@ mod scan;
 mod tone;
 
 use super::fft::{Complex, Fft};
-use crate::error::AcquisitionError;
+use crate::error::{Error, ErrorKind};
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ};
 
 pub use check::{CrossCheck, KnownSignal};
@@ -416,6 +416,37 @@ fn ln_gamma_survival(k: f64, x: f64) -> f64 {
         sum += libm::exp(t - max_term);
     }
     -x + max_term + libm::log(sum)
+}
+
+/// Errors of acquisition ([`crate::tracking::acquisition`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AcquisitionError {
+    /// A configuration value, a candidate, a known signal or a margin was NaN or infinite.
+    #[error("non-finite acquisition configuration")]
+    NonFinite,
+    /// The configuration is out of range (sample rate outside 1.023–64 MHz, IF beyond the
+    /// sample rate, Doppler step below 10 Hz, more Doppler bins than the engine holds, zero or
+    /// too many milliseconds, a false-alarm probability outside (0, 0.5)), or the engine's
+    /// FFT size is not a power of two in 1024–8192.
+    #[error("acquisition configuration out of range")]
+    InvalidConfig,
+    /// Fewer samples than the configured number of milliseconds needs.
+    #[error("fewer samples than the search needs")]
+    NotEnoughSamples,
+    /// The quadrature samples are fewer than the in-phase samples.
+    #[error("quadrature samples shorter than in-phase samples")]
+    LengthMismatch,
+}
+
+impl Error for AcquisitionError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Self::NonFinite => ErrorKind::NonFinite,
+            _ => ErrorKind::InvalidInput,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -111,7 +111,7 @@ impl Track {
     fn record<T: Real>(
         &mut self,
         at: &At<'_>,
-        result: Result<FilterEstimate<T>, gnss_attitude::DcmError>,
+        result: Result<FilterEstimate<T>, gnss_attitude::attitude::dcm_filter::DcmError>,
     ) {
         let At {
             step,
@@ -220,6 +220,90 @@ fn six_state_config<T: Real>(setup: &Setup) -> DcmFilterConfig<T> {
     }
 }
 
+/// Every filter of one run.
+struct Filters {
+    multi: MultiStructureFilter<f32>,
+    rigid_all: RigidBodyFilter<f32>,
+    rigid_pair: RigidBodyFilter<f32>,
+    doppler_free: RigidBodyFilter<f32>,
+    literal_rigid: RigidBodyFilter<f32>,
+    literal_free: RigidBodyFilter<f32>,
+    six64: DirectionCosineFilter<f64>,
+    rigid64: RigidBodyFilter<f64>,
+}
+
+impl Filters {
+    /// All filters started from `c0` (the literal-noise pair with `literal`).
+    fn new(setup: &Setup, c0: &Matrix3<f64>, literal: Noise) -> anyhow::Result<Self> {
+        let noise = setup.noise;
+        let array32 = AntennaArray::new(setup.array.positions().map(|p| p.cast::<f32>()))
+            .map_err(|e| anyhow!("{e}"))?;
+        let r0 = SMatrix::<f32, 6, 6>::identity() * (SIGMA_INITIAL * SIGMA_INITIAL) as f32;
+        Ok(Self {
+            multi: MultiStructureFilter::new(
+                &array32,
+                six_state_config(setup),
+                &c0.cast::<f32>(),
+                &r0,
+            )
+            .map_err(|e| anyhow!("multi-structure filter: {e}"))?,
+            rigid_all: rigid::<f32>(&setup.array, noise, c0)?,
+            rigid_pair: rigid::<f32>(&setup.array, noise, c0)?,
+            doppler_free: rigid::<f32>(&setup.array, noise, c0)?,
+            literal_rigid: rigid::<f32>(&setup.array, literal, c0)?,
+            literal_free: rigid::<f32>(&setup.array, literal, c0)?,
+            six64: DirectionCosineFilter::<f64>::new(
+                &setup.array,
+                six_state_config(setup),
+                c0,
+                &(SMatrix::<f64, 6, 6>::identity() * SIGMA_INITIAL * SIGMA_INITIAL),
+            )
+            .map_err(|e| anyhow!("six-state filter (f64): {e}"))?,
+            rigid64: rigid::<f64>(&setup.array, noise, c0)?,
+        })
+    }
+}
+
+/// The multi-structure filter's step into the six-state, per-structure and fused tracks;
+/// returns the six-state estimate (f64) for the f32-vs-f64 comparison.
+fn record_multi(
+    out: &mut RunResult,
+    at: &At<'_>,
+    multi_result: Result<
+        gnss_attitude::attitude::multi_structure::MultiStructureEstimate<f32>,
+        gnss_attitude::attitude::dcm_filter::DcmError,
+    >,
+) -> Option<Matrix3<f64>> {
+    use gnss_attitude::attitude::dcm_filter::DcmError;
+    let six32 = multi_result
+        .as_ref()
+        .ok()
+        .and_then(|m| m.structures[0])
+        .map(|e| to_f64(&e.c_rb));
+    match multi_result {
+        Ok(m) => {
+            out.six_state
+                .record(at, m.structures[0].ok_or(DcmError::NotARotation));
+            for (track, e) in out.structures_b13.iter_mut().zip(&m.structures[1..]) {
+                let quiet = At {
+                    keep_series: false,
+                    ..*at
+                };
+                track.record(&quiet, e.ok_or(DcmError::NotARotation));
+            }
+            for (c, i) in out.inlier_counts.iter_mut().zip(m.inliers) {
+                *c += usize::from(i);
+            }
+            out.multi_structure.record(at, Ok(m.fused));
+        }
+        Err(e) => {
+            out.six_state.record::<f32>(at, Err(e));
+            out.multi_structure.record::<f32>(at, Err(e));
+        }
+    }
+    six32
+}
+
 /// Runs every filter over one realization.
 pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult> {
     let mut rng =
@@ -231,28 +315,9 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
     let noise = setup.noise;
     let m0 = setup.motion.attitude(0.0);
     let c0 = m0 * truth::small_rotation(&mut rng, SIGMA_INITIAL);
-    let array32 = AntennaArray::new(setup.array.positions().map(|p| p.cast::<f32>()))
-        .map_err(|e| anyhow!("{e}"))?;
-    let r0 = SMatrix::<f32, 6, 6>::identity() * (SIGMA_INITIAL * SIGMA_INITIAL) as f32;
-    let mut multi =
-        MultiStructureFilter::new(&array32, six_state_config(setup), &c0.cast::<f32>(), &r0)
-            .map_err(|e| anyhow!("multi-structure filter: {e}"))?;
-    let mut rigid_all = rigid::<f32>(&setup.array, noise, &c0)?;
-    let mut rigid_pair = rigid::<f32>(&setup.array, noise, &c0)?;
-    let mut doppler_free = rigid::<f32>(&setup.array, noise, &c0)?;
     let literal = setup.doppler_study.unwrap_or(noise);
-    let mut literal_rigid = rigid::<f32>(&setup.array, literal, &c0)?;
-    let mut literal_free = rigid::<f32>(&setup.array, literal, &c0)?;
+    let mut f = Filters::new(setup, &c0, literal)?;
     let reference = run == 0;
-    let mut six64 = DirectionCosineFilter::<f64>::new(
-        &setup.array,
-        six_state_config(setup),
-        &c0,
-        &(SMatrix::<f64, 6, 6>::identity() * SIGMA_INITIAL * SIGMA_INITIAL),
-    )
-    .map_err(|e| anyhow!("six-state filter (f64): {e}"))?;
-    let mut rigid64 = rigid::<f64>(&setup.array, noise, &c0)?;
-
     let steps = (setup.duration / noise.dt).round() as usize;
     let mut out = RunResult::default();
     let mut diff = (0.0f64, 0.0f64);
@@ -270,49 +335,22 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
             &mut rng,
         );
         let e32 = truth::epoch_f32(&e64);
-        let (half, last) = (t > setup.duration / 2.0, k == steps);
         let at = At {
             step: k,
             t,
-            second_half: half,
-            last,
+            second_half: t > setup.duration / 2.0,
+            last: k == steps,
             keep_series: reference,
             truth: &m_now,
         };
-        let multi_result = multi.step(&e32);
-        let six32 = multi_result
-            .as_ref()
-            .ok()
-            .and_then(|m| m.structures[0])
-            .map(|e| to_f64(&e.c_rb));
-        match multi_result {
-            Ok(m) => {
-                let six = m.structures[0].ok_or(gnss_attitude::DcmError::NotARotation);
-                out.six_state.record(&at, six);
-                for (track, e) in out.structures_b13.iter_mut().zip(&m.structures[1..]) {
-                    let quiet = At {
-                        keep_series: false,
-                        ..at
-                    };
-                    track.record(&quiet, e.ok_or(gnss_attitude::DcmError::NotARotation));
-                }
-                for (c, i) in out.inlier_counts.iter_mut().zip(m.inliers) {
-                    *c += usize::from(i);
-                }
-                out.multi_structure.record(&at, Ok(m.fused));
-            }
-            Err(e) => {
-                out.six_state.record::<f32>(&at, Err(e));
-                out.multi_structure.record::<f32>(&at, Err(e));
-            }
-        }
-        let r = rigid_all.step(&e32);
+        let six32 = record_multi(&mut out, &at, f.multi.step(&e32));
+        let r = f.rigid_all.step(&e32);
         out.rigid_body.record(&at, r);
-        let rp = rigid_pair.step(&truth::without_13(&e32));
+        let rp = f.rigid_pair.step(&truth::without_13(&e32));
         out.rigid_body_pair.record(&at, rp);
         if reference {
-            let s64 = six64.step(&e64);
-            let r64 = rigid64.step(&e64);
+            let s64 = f.six64.step(&e64);
+            let r64 = f.rigid64.step(&e64);
             if let (Ok(s64), Some(c32)) = (s64, six32) {
                 diff.0 = diff.0.max(attitude_error(&s64.c_rb, &c32).norm());
             }
@@ -323,7 +361,7 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
             }
         }
         if setup.doppler_study.is_some() {
-            let df = doppler_free.step(&truth::without_doppler(&e32));
+            let df = f.doppler_free.step(&truth::without_doppler(&e32));
             out.doppler_free.record(&at, df);
             let el = truth::epoch_f32(&truth::epoch(
                 &setup.array,
@@ -334,9 +372,9 @@ pub fn one_run(setup: &Setup, seed: u64, run: usize) -> anyhow::Result<RunResult
                 literal.sigma_velocity,
                 &mut rng_literal,
             ));
-            let lr = literal_rigid.step(&el);
+            let lr = f.literal_rigid.step(&el);
             out.literal_rigid_body.record(&at, lr);
-            let lf = literal_free.step(&truth::without_doppler(&el));
+            let lf = f.literal_free.step(&truth::without_doppler(&el));
             out.literal_doppler_free.record(&at, lf);
         }
         m_prev = m_now;

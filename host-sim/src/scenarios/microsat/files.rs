@@ -10,15 +10,14 @@ use plotters::prelude::*;
 
 use super::metrics::{deg, FlightMetrics};
 use super::run::FlightRecord;
-use crate::report::{plot_panels, write_csv, Panel, Series};
+use crate::report::{plot_panels, write_csv, Dash, Panel, Series};
 
 fn source_code(s: AttitudeSource) -> f64 {
     match s {
         AttitudeSource::None => 0.0,
         AttitudeSource::Snapshot => 1.0,
-        AttitudeSource::OneStage => 2.0,
+        AttitudeSource::Fine => 2.0,
         AttitudeSource::GyroCoast => 3.0,
-        AttitudeSource::RigidBody => 4.0,
     }
 }
 
@@ -30,8 +29,38 @@ pub fn write_all(
     title: &str,
     summary: &[String],
 ) -> Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
-    // CSV: the receiver every 0.1 s
+    let mut files = vec![write_attitude_csv(dir, record)?];
+    files.extend(write_stage_csvs(dir, record)?);
+    files.push(write_sky_csv(dir, record)?);
+    // CSV: events
+    let path = dir.join("microsat_events.csv");
+    let mut text = String::from("t_s,event\n");
+    for (t, e) in &record.events {
+        let _ = writeln!(text, "{t:.4},\"{e:?}\"");
+    }
+    std::fs::write(&path, text)?;
+    files.push(path);
+    // PNG: attitude error with 3σ
+    let path = dir.join("microsat_attitude_error.png");
+    plot_error(&path, record, metrics, title)?;
+    files.push(path);
+    // PNG: satellites and C/N0
+    let path = dir.join("microsat_satellites.png");
+    plot_satellites(&path, record, title)?;
+    files.push(path);
+    // PNG: sky
+    let path = dir.join("microsat_sky.png");
+    plot_sky(&path, record, title)?;
+    files.push(path);
+    // Markdown report
+    let path = dir.join("microsat_report.md");
+    std::fs::write(&path, markdown(record, metrics, title, summary))?;
+    files.push(path);
+    Ok(files)
+}
+
+/// The receiver every 0.1 s.
+fn write_attitude_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
     let path = dir.join("microsat_attitude.csv");
     let header = [
         "t_s",
@@ -92,8 +121,12 @@ pub fn write_all(
             ]
         }),
     )?;
-    files.push(path);
-    // CSV: the stages at their own epochs
+    Ok(path)
+}
+
+/// The stages at their own epochs.
+fn write_stage_csvs(dir: &Path, record: &FlightRecord) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
     for (name, samples) in [
         ("snapshot", &record.snapshots),
         ("rigid_body", &record.rigid),
@@ -118,7 +151,11 @@ pub fn write_all(
         )?;
         files.push(path);
     }
-    // CSV: the sky
+    Ok(files)
+}
+
+/// The sky every second.
+fn write_sky_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
     let path = dir.join("microsat_sky.csv");
     write_csv(
         &path,
@@ -141,32 +178,7 @@ pub fn write_all(
             ]
         }),
     )?;
-    files.push(path);
-    // CSV: events
-    let path = dir.join("microsat_events.csv");
-    let mut text = String::from("t_s,event\n");
-    for (t, e) in &record.events {
-        let _ = writeln!(text, "{t:.4},\"{e:?}\"");
-    }
-    std::fs::write(&path, text)?;
-    files.push(path);
-    // PNG: attitude error with 3σ
-    let path = dir.join("microsat_attitude_error.png");
-    plot_error(&path, record, metrics, title)?;
-    files.push(path);
-    // PNG: satellites and C/N0
-    let path = dir.join("microsat_satellites.png");
-    plot_satellites(&path, record, title)?;
-    files.push(path);
-    // PNG: sky
-    let path = dir.join("microsat_sky.png");
-    plot_sky(&path, record, title)?;
-    files.push(path);
-    // Markdown report
-    let path = dir.join("microsat_report.md");
-    std::fs::write(&path, markdown(record, metrics, title, summary))?;
-    files.push(path);
-    Ok(files)
+    Ok(path)
 }
 
 fn plot_error(
@@ -180,12 +192,15 @@ fn plot_error(
     let from = metrics.ttff_s;
     for (a, name) in axes.iter().enumerate() {
         let pts = |f: &dyn Fn(&super::run::Sample) -> f64| -> Vec<(f64, f64)> {
+            // no attitude: a gap in the line
             record
                 .samples
                 .iter()
-                .filter(|s| s.t >= from && s.source != AttitudeSource::None)
-                .map(|s| (s.t, f(s)))
-                .filter(|p| p.1.is_finite())
+                .filter(|s| s.t >= from)
+                .map(|s| match s.source {
+                    AttitudeSource::None => (s.t, f64::NAN),
+                    _ => (s.t, f(s)),
+                })
                 .collect()
         };
         let mut series = vec![
@@ -220,45 +235,58 @@ fn plot_error(
     )
 }
 
-fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
+/// Colours of the plot palette.
+const PALETTE_SIZE: usize = 10;
+/// Gap between two sky points of one satellite (1 s apart) that breaks its C/N0 line, s.
+const SKY_GAP_S: f64 = 1.5;
+
+/// The four satellite counts as nested stripes, widest and palest at the bottom, so that
+/// counts that coincide (they often do) all stay visible: above the mask ⊇ tracked ⊇ in the
+/// fine filter ⊇ ambiguities fixed.
+fn count_series(record: &FlightRecord) -> Vec<Series> {
     let s = &record.samples;
-    let count = vec![
-        Series::line(
-            "above the mask",
-            s.iter().map(|x| (x.t, x.visible as f64)).collect(),
-            3,
-        ),
-        Series::line(
-            "tracked",
-            s.iter().map(|x| (x.t, x.tracked as f64)).collect(),
-            0,
-        ),
-        Series::line(
-            "in the fine filter",
-            s.iter().map(|x| (x.t, x.used as f64)).collect(),
-            1,
-        ),
-        Series::line(
-            "ambiguities fixed",
-            s.iter().map(|x| (x.t, x.fixed as f64)).collect(),
-            2,
-        ),
-    ];
+    let pts = |f: fn(&super::run::Sample) -> usize| -> Vec<(f64, f64)> {
+        s.iter().map(|x| (x.t, f(x) as f64)).collect()
+    };
+    vec![
+        Series::steps("above the mask", &pts(|x| x.visible), 7).styled(Dash::Solid, 12),
+        Series::steps("tracked", &pts(|x| x.tracked), 0).styled(Dash::Solid, 7),
+        Series::steps("in the fine filter", &pts(|x| x.used), 1).styled(Dash::Solid, 3),
+        Series::steps("ambiguities fixed", &pts(|x| x.fixed), 3).styled(Dash::Dashed, 2),
+    ]
+}
+
+/// Each satellite's reported C/N0 while it is tracked; a gap (NaN) where it is not tracked or
+/// not in view, so that the line breaks instead of joining across.
+fn cn0_series(record: &FlightRecord) -> Vec<Series> {
     let mut prns: Vec<u8> = record.sky.iter().map(|p| p.prn).collect();
     prns.sort_unstable();
     prns.dedup();
     let mut cn0 = Vec::new();
     for (i, prn) in prns.iter().enumerate() {
-        let pts: Vec<(f64, f64)> = record
-            .sky
-            .iter()
-            .filter(|p| p.prn == *prn && p.tracked)
-            .map(|p| (p.t, p.cn0_dbhz))
-            .collect();
-        if pts.len() > 1 {
-            cn0.push(Series::line(format!("PRN {prn}"), pts, i + 4));
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        let mut last_t = f64::NEG_INFINITY;
+        for p in record.sky.iter().filter(|p| p.prn == *prn) {
+            if p.t - last_t > SKY_GAP_S {
+                pts.push((p.t, f64::NAN));
+            }
+            last_t = p.t;
+            pts.push((p.t, if p.tracked { p.cn0_dbhz } else { f64::NAN }));
+        }
+        if pts.iter().filter(|p| p.1.is_finite()).count() > 1 {
+            // the palette's ten colours, then the same dashed
+            let dash = if i < PALETTE_SIZE {
+                Dash::Solid
+            } else {
+                Dash::Dashed
+            };
+            cn0.push(Series::line(format!("PRN {prn}"), pts, i).styled(dash, 2));
         }
     }
+    cn0
+}
+
+fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
     plot_panels(
         path,
         &format!("{title}: satellites and C/N0"),
@@ -266,11 +294,11 @@ fn plot_satellites(path: &Path, record: &FlightRecord, title: &str) -> Result<()
         &[
             Panel {
                 y_label: "satellites".into(),
-                series: count,
+                series: count_series(record),
             },
             Panel {
                 y_label: "C/N0 reported, dB-Hz".into(),
-                series: cn0,
+                series: cn0_series(record),
             },
         ],
     )
@@ -298,47 +326,65 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
         .map_err(err)?;
     let mut chart = ChartBuilder::on(&root)
         .margin(20)
-        .build_cartesian_2d(-1.15f64..1.15f64, -1.15f64..1.15f64)
+        .build_cartesian_2d(-SKY_EXTENT..SKY_EXTENT, -SKY_EXTENT..SKY_EXTENT)
         .map_err(err)?;
-    // rings every 30° of elevation, the 10° mask, spokes every 45° of azimuth
+    draw_sky_grid(&mut chart).map_err(err)?;
+    draw_sky_tracks(&mut chart, record).map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// Half-width of the sky plot's square (the horizon is at radius 1).
+const SKY_EXTENT: f64 = 1.15;
+/// Elevation mask drawn on the sky plot, degrees.
+const SKY_MASK_DEG: f64 = 10.0;
+
+type SkyChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+type SkyResult = std::result::Result<
+    (),
+    DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>,
+>;
+
+/// Rings every 30° of elevation, the 10° mask, spokes every 90° of azimuth with labels.
+fn draw_sky_grid(chart: &mut SkyChart<'_, '_>) -> SkyResult {
     for el in [0.0f64, 30.0, 60.0] {
         let r = 1.0 - el / 90.0;
-        chart
-            .draw_series(LineSeries::new(circle(r), BLACK.mix(0.3)))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                format!("{el:.0}°"),
-                (0.02, r - 0.04),
-                ("sans-serif", 14),
-            )))
-            .map_err(err)?;
+        chart.draw_series(LineSeries::new(circle(r), BLACK.mix(0.3)))?;
+        chart.draw_series(std::iter::once(Text::new(
+            format!("{el:.0}°"),
+            (0.02, r - 0.04),
+            ("sans-serif", 14),
+        )))?;
     }
-    let r_mask = 1.0 - 10.0 / 90.0;
-    chart
-        .draw_series(LineSeries::new(circle(r_mask), RED.mix(0.5)))
-        .map_err(err)?;
+    let r_mask = 1.0 - SKY_MASK_DEG / 90.0;
+    chart.draw_series(LineSeries::new(circle(r_mask), RED.mix(0.5)))?;
     for (az, label) in [(0.0f64, "+x"), (90.0, "+y"), (180.0, "−x"), (270.0, "−y")] {
         let a = az.to_radians();
-        chart
-            .draw_series(LineSeries::new(
-                vec![(0.0, 0.0), (a.sin(), a.cos())],
-                BLACK.mix(0.15),
-            ))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                label.to_string(),
-                (1.07 * a.sin() - 0.03, 1.07 * a.cos() + 0.02),
-                ("sans-serif", 16),
-            )))
-            .map_err(err)?;
+        chart.draw_series(LineSeries::new(
+            vec![(0.0, 0.0), (a.sin(), a.cos())],
+            BLACK.mix(0.15),
+        ))?;
+        chart.draw_series(std::iter::once(Text::new(
+            label.to_string(),
+            (1.07 * a.sin() - 0.03, 1.07 * a.cos() + 0.02),
+            ("sans-serif", 16),
+        )))?;
     }
+    Ok(())
+}
+
+/// Each satellite's track: bright dots while tracked, faint ones otherwise, its PRN at the
+/// end.
+fn draw_sky_tracks(chart: &mut SkyChart<'_, '_>, record: &FlightRecord) -> SkyResult {
     let mut prns: Vec<u8> = record.sky.iter().map(|p| p.prn).collect();
     prns.sort_unstable();
     prns.dedup();
     for (i, prn) in prns.iter().enumerate() {
-        let color = Palette99::pick(i + 4).to_rgba();
+        let color = crate::report::palette(i);
         let pts: Vec<(f64, f64, bool)> = record
             .sky
             .iter()
@@ -348,26 +394,21 @@ fn plot_sky(path: &Path, record: &FlightRecord, title: &str) -> Result<()> {
                 (r * p.azimuth.sin(), r * p.azimuth.cos(), p.tracked)
             })
             .collect();
-        chart
-            .draw_series(pts.iter().map(|&(x, y, tracked)| {
-                if tracked {
-                    Circle::new((x, y), 2, color.filled())
-                } else {
-                    Circle::new((x, y), 1, color.mix(0.4).filled())
-                }
-            }))
-            .map_err(err)?;
+        chart.draw_series(pts.iter().map(|&(x, y, tracked)| {
+            if tracked {
+                Circle::new((x, y), 2, color.filled())
+            } else {
+                Circle::new((x, y), 1, color.mix(0.4).filled())
+            }
+        }))?;
         if let Some(&(x, y, _)) = pts.last() {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    format!("{prn}"),
-                    (x + 0.01, y + 0.01),
-                    ("sans-serif", 13),
-                )))
-                .map_err(err)?;
+            chart.draw_series(std::iter::once(Text::new(
+                format!("{prn}"),
+                (x + 0.01, y + 0.01),
+                ("sans-serif", 13),
+            )))?;
         }
     }
-    root.present().map_err(err)?;
     Ok(())
 }
 

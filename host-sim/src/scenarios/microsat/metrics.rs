@@ -4,7 +4,6 @@
 
 use gnss_attitude::receiver::{AttitudeSource, ReceiverEvent};
 use nalgebra::Vector3;
-use serde_json::{json, Value};
 
 use super::run::{FlightRecord, Sample, StageSample};
 
@@ -32,19 +31,20 @@ pub struct StageStats {
     pub satellites: f64,
 }
 
-/// One injected fault's outcome.
-#[derive(Clone, Debug)]
-pub struct FaultOutcome {
-    /// Name.
-    pub name: String,
-    /// Whether the receiver reported it.
-    pub detected: bool,
-    /// Seconds from the fault's end until the receiver had recovered (see each fault).
-    pub recovered_s: Option<f64>,
-    /// When it happened, s.
-    pub at_s: f64,
-    /// What was detected and done.
-    pub detail: String,
+crate::metrics! {
+    /// One injected (or natural) fault's outcome.
+    pub struct FaultOutcome {
+        /// The fault.
+        #[metric(unit = "")] pub name: String,
+        /// Whether the receiver reported it.
+        #[metric(unit = "")] pub detected: bool,
+        /// From the fault's end until the receiver had recovered (null: never).
+        #[metric(unit = "s")] pub recovered_s: Option<f64>,
+        /// When it happened.
+        #[metric(unit = "s")] pub at_s: f64,
+        /// What was detected and done.
+        #[metric(unit = "")] pub detail: String,
+    }
 }
 
 /// Everything the scenario reports.
@@ -114,129 +114,176 @@ fn stage_stats(
     }
 }
 
-/// The metrics of one flight of `duration` seconds.
-pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
-    let samples = &record.samples;
-    let event_time = |pred: &dyn Fn(&ReceiverEvent) -> bool| {
-        record.events.iter().find(|(_, e)| pred(e)).map(|(t, _)| *t)
-    };
-    let ttff = samples
-        .iter()
-        .find(|s| s.source != AttitudeSource::None)
-        .map_or(f64::NAN, |s| s.t);
-    let fine_lock =
-        event_time(&|e| matches!(e, ReceiverEvent::FineLocked { .. })).unwrap_or(f64::NAN);
-    let from = fine_lock + SETTLE_S;
-    let converged: Vec<&Sample> = samples.iter().filter(|s| s.t >= from).collect();
-    let has = |s: &Sample| s.source != AttitudeSource::None;
-    let (rms, max, count) = rms_max(converged.iter().filter(|s| has(s)).map(|s| &s.error));
-    let (sigma_rms, _, _) = rms_max(converged.iter().filter(|s| has(s)).map(|s| &s.sigma));
-    let (bound, _, _) = rms_max(converged.iter().map(|s| &s.bound));
+/// Record interval of the receiver's attitude and the stages at 10 Hz, s.
+const RECORD_INTERVAL_S: f64 = 0.1;
+/// Interval of the snapshot solutions (cold start, 1 Hz), s.
+const SNAPSHOT_INTERVAL_S: f64 = 1.0;
+/// The rigid-body filter's errors count from this long after its first estimate, s.
+const RIGID_SETTLE_S: f64 = 30.0;
+/// rad/s to °/h.
+const DEG_PER_H: f64 = 180.0 / std::f64::consts::PI * 3600.0;
+
+fn has_attitude(s: &Sample) -> bool {
+    s.source != AttitudeSource::None
+}
+
+/// The receiver's attitude after `from`, and its availability over the flight.
+fn receiver_stats(samples: &[Sample], ttff: f64, from: f64) -> StageStats {
+    let converged = samples.iter().filter(|s| s.t >= from && has_attitude(s));
+    let (rms, max, count) = rms_max(converged.clone().map(|s| &s.error));
+    let (sigma_rms, _, _) = rms_max(converged.map(|s| &s.sigma));
     let n = samples.len().max(1) as f64;
-    let availability = samples.iter().filter(|s| has(s)).count() as f64 / n;
-    let receiver = StageStats {
+    StageStats {
         name: "receiver",
         first_s: Some(ttff),
         rms,
         max,
         sigma_rms,
-        availability,
+        availability: samples.iter().filter(|s| has_attitude(s)).count() as f64 / n,
         count,
         satellites: f64::NAN,
-    };
-    // the fine filter: locked samples after convergence
-    let fine_samples: Vec<StageSample> = samples
+    }
+}
+
+/// The receiver's records where `keep` holds, as a stage's samples.
+fn stage_samples(samples: &[Sample], keep: fn(&Sample) -> bool, fine: bool) -> Vec<StageSample> {
+    samples
         .iter()
-        .filter(|s| s.fine_locked && s.source == AttitudeSource::OneStage)
+        .filter(|s| keep(s))
         .map(|s| StageSample {
             t: s.t,
-            error: s.fine_error,
+            error: if fine { s.fine_error } else { s.error },
             sigma: s.sigma,
         })
-        .collect();
-    let mut fine = stage_stats("one-stage (fine)", &fine_samples, from, duration, 0.1);
+        .collect()
+}
+
+/// Per stage: snapshot, the fine filter (locked, after convergence), rigid body, gyro coast.
+fn stages(
+    record: &FlightRecord,
+    ttff: f64,
+    fine_lock: f64,
+    from: f64,
+    duration: f64,
+) -> Vec<StageStats> {
+    let samples = &record.samples;
+    let fine_samples = stage_samples(
+        samples,
+        |s| s.fine_locked && s.source == AttitudeSource::Fine,
+        true,
+    );
+    let mut fine = stage_stats(
+        "one-stage (fine)",
+        &fine_samples,
+        from,
+        duration,
+        RECORD_INTERVAL_S,
+    );
     fine.first_s = Some(fine_lock);
-    let coast: Vec<StageSample> = samples
-        .iter()
-        .filter(|s| s.source == AttitudeSource::GyroCoast)
-        .map(|s| StageSample {
-            t: s.t,
-            error: s.error,
-            sigma: s.sigma,
-        })
-        .collect();
-    let stages = vec![
+    let coast = stage_samples(samples, |s| s.source == AttitudeSource::GyroCoast, false);
+    let mut stages = vec![
         stage_stats(
             "snapshot (cold start, 1 Hz)",
             &record.snapshots,
             ttff,
             duration,
-            1.0,
+            SNAPSHOT_INTERVAL_S,
         ),
         fine,
         stage_stats(
             "rigid-body (baselines + Doppler)",
             &record.rigid,
-            record.rigid.first().map_or(f64::NAN, |s| s.t + 30.0),
+            record
+                .rigid
+                .first()
+                .map_or(f64::NAN, |s| s.t + RIGID_SETTLE_S),
             duration,
-            0.1,
+            RECORD_INTERVAL_S,
         ),
-        stage_stats("gyro coast", &coast, 0.0, duration, 0.1),
+        stage_stats("gyro coast", &coast, 0.0, duration, RECORD_INTERVAL_S),
     ];
+    // the satellites each stage used, averaged after the first fix
     let after_fix: Vec<&Sample> = samples.iter().filter(|s| s.t >= ttff).collect();
-    let mean = |f: &dyn Fn(&Sample) -> Option<f64>| {
-        let v: Vec<f64> = after_fix.iter().filter_map(|s| f(s)).collect();
-        if v.is_empty() {
-            f64::NAN
-        } else {
-            v.iter().sum::<f64>() / v.len() as f64
-        }
-    };
-    let mut stages = stages;
-    let fixed = mean(&|s| Some(s.fixed as f64));
-    if let Some(st) = stages.get_mut(0) {
-        st.satellites = fixed;
-    }
-    if let Some(st) = stages.get_mut(1) {
-        st.satellites = mean(&|s| (s.fine_locked && s.used > 0).then_some(s.used as f64));
-    }
-    if let Some(st) = stages.get_mut(2) {
-        st.satellites = fixed;
-    }
-    let mut receiver = receiver;
-    receiver.satellites = mean(&|s| Some(s.tracked as f64));
-    let tracked = if after_fix.is_empty() {
-        (0.0, 0, 0)
+    let fixed = mean_over(&after_fix, &|s| Some(s.fixed as f64));
+    stages[0].satellites = fixed;
+    stages[1].satellites = mean_over(&after_fix, &|s| {
+        (s.fine_locked && s.used > 0).then_some(s.used as f64)
+    });
+    stages[2].satellites = fixed;
+    stages
+}
+
+/// The mean of `f` over `samples` where it is defined (NaN when nowhere).
+fn mean_over(samples: &[&Sample], f: &dyn Fn(&Sample) -> Option<f64>) -> f64 {
+    let v: Vec<f64> = samples.iter().filter_map(|s| f(s)).collect();
+    if v.is_empty() {
+        f64::NAN
     } else {
-        (
-            after_fix.iter().map(|s| s.tracked as f64).sum::<f64>() / after_fix.len() as f64,
-            after_fix.iter().map(|s| s.tracked).min().unwrap_or(0),
-            after_fix.iter().map(|s| s.tracked).max().unwrap_or(0),
-        )
-    };
-    let split = |on_samples: bool| {
-        let part: Vec<&&Sample> = converged
-            .iter()
-            .filter(|s| has(s) && (s.t < record.sample_level_s) == on_samples)
-            .collect();
-        let (rms, _, n) = rms_max(part.iter().map(|s| &s.error));
-        let (b, _, _) = rms_max(part.iter().map(|s| &s.bound));
-        (rms, b, n)
-    };
+        v.iter().sum::<f64>() / v.len() as f64
+    }
+}
+
+/// Satellites tracked after the first fix: mean, min, max.
+fn tracked_counts(after_fix: &[&Sample]) -> (f64, usize, usize) {
+    if after_fix.is_empty() {
+        return (0.0, 0, 0);
+    }
+    (
+        after_fix.iter().map(|s| s.tracked as f64).sum::<f64>() / after_fix.len() as f64,
+        after_fix.iter().map(|s| s.tracked).min().unwrap_or(0),
+        after_fix.iter().map(|s| s.tracked).max().unwrap_or(0),
+    )
+}
+
+/// The converged receiver attitude on one input path: (RMS error, RMS bound, samples).
+fn by_path(
+    converged: &[&Sample],
+    sample_level_s: f64,
+    on_samples: bool,
+) -> (Vector3<f64>, Vector3<f64>, usize) {
+    let part: Vec<&&Sample> = converged
+        .iter()
+        .filter(|s| has_attitude(s) && (s.t < sample_level_s) == on_samples)
+        .collect();
+    let (rms, _, n) = rms_max(part.iter().map(|s| &s.error));
+    let (b, _, _) = rms_max(part.iter().map(|s| &s.bound));
+    (rms, b, n)
+}
+
+/// The metrics of one flight of `duration` seconds.
+pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
+    let samples = &record.samples;
+    let ttff = samples
+        .iter()
+        .find(|s| has_attitude(s))
+        .map_or(f64::NAN, |s| s.t);
+    let fine_lock = record
+        .events
+        .iter()
+        .find(|(_, e)| matches!(e, ReceiverEvent::FineLocked { .. }))
+        .map_or(f64::NAN, |(t, _)| *t);
+    let from = fine_lock + SETTLE_S;
+    let converged: Vec<&Sample> = samples.iter().filter(|s| s.t >= from).collect();
+    let (bound, _, _) = rms_max(converged.iter().map(|s| &s.bound));
+    let after_fix: Vec<&Sample> = samples.iter().filter(|s| s.t >= ttff).collect();
+    let mut receiver = receiver_stats(samples, ttff, from);
+    receiver.satellites = mean_over(&after_fix, &|s| Some(s.tracked as f64));
     FlightMetrics {
-        by_path: [split(true), split(false)],
+        by_path: [
+            by_path(&converged, record.sample_level_s, true),
+            by_path(&converged, record.sample_level_s, false),
+        ],
         ttff_s: ttff,
         fine_lock_s: fine_lock,
         converged_from_s: from,
+        availability: receiver.availability,
         receiver,
-        stages,
+        stages: stages(record, ttff, fine_lock, from, duration),
         bound,
-        availability,
-        tracked,
+        tracked: tracked_counts(&after_fix),
         faults: Vec::new(),
-        gyro_bias_error: (record.gyro_bias.1 - record.gyro_bias.0)
-            * (180.0 / std::f64::consts::PI * 3600.0),
-        gyro_bias_truth: record.gyro_bias.0 * (180.0 / std::f64::consts::PI * 3600.0),
+        gyro_bias_error: (record.gyro_bias.1 - record.gyro_bias.0) * DEG_PER_H,
+        gyro_bias_truth: record.gyro_bias.0 * DEG_PER_H,
     }
 }
 
@@ -245,29 +292,11 @@ pub fn deg(v: &Vector3<f64>) -> [f64; 3] {
     [v.x.to_degrees(), v.y.to_degrees(), v.z.to_degrees()]
 }
 
-/// The faults as JSON.
-pub fn faults_json(faults: &[FaultOutcome]) -> Value {
-    Value::Array(
-        faults
-            .iter()
-            .map(|f| {
-                json!({
-                    "name": f.name,
-                    "detected": f.detected,
-                    "recovered_s": f.recovered_s,
-                    "at_s": f.at_s,
-                    "detail": f.detail,
-                })
-            })
-            .collect(),
-    )
-}
-
 /// First time `≥ from` after which the receiver's attitude comes from the fine filter with its
 /// error inside 3σ on every axis for at least `hold` seconds; seconds after `from`.
 pub fn attitude_recovery(samples: &[Sample], from: f64, hold: f64) -> Option<f64> {
     let ok = |s: &Sample| {
-        s.source == AttitudeSource::OneStage
+        s.source == AttitudeSource::Fine
             && (0..3).all(|a| s.error[a].abs() <= 3.0 * s.sigma[a].max(1e-9))
     };
     let mut start: Option<f64> = None;
@@ -284,160 +313,238 @@ pub fn attitude_recovery(samples: &[Sample], from: f64, hold: f64) -> Option<f64
     None
 }
 
+/// How long the attitude must stay within 3σ to count as recovered, s.
+const RECOVERY_HOLD_S: f64 = 1.0;
+/// Windows in which the receiver's reaction to a fault is looked for, s after the fault.
+struct Windows {
+    /// A setting satellite lost: from this long before it sets...
+    lost_before: f64,
+    /// ... to this long after.
+    lost: f64,
+    /// A rising satellite's first observation.
+    acquired: f64,
+    /// A rising satellite's ambiguities fixed.
+    fixed: f64,
+    /// An antenna blockage detected.
+    blocked: f64,
+    /// A blocked antenna restored (after the blockage's end).
+    restored: f64,
+    /// A cycle slip found.
+    slip_found: f64,
+    /// A bit flip flagged.
+    bit_flagged: f64,
+}
+
+const WINDOW: Windows = Windows {
+    lost_before: 0.2,
+    lost: 3.0,
+    acquired: 10.0,
+    fixed: 20.0,
+    blocked: 1.0,
+    restored: 5.0,
+    slip_found: 3.0,
+    bit_flagged: 0.1,
+};
+
+/// Antenna names.
+const ANTENNA: [&str; 3] = ["A", "B", "C"];
+
+fn never_or(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    v.map_or("never".into(), f)
+}
+
+/// The record's events, searched by time window.
+struct Events<'a> {
+    record: &'a FlightRecord,
+}
+
+impl Events<'_> {
+    /// The time of the first event in `[from, to]` that satisfies `pred`.
+    fn find(&self, from: f64, to: f64, pred: &dyn Fn(&ReceiverEvent) -> bool) -> Option<f64> {
+        self.record
+            .events
+            .iter()
+            .find(|(t, e)| *t >= from && *t <= to && pred(e))
+            .map(|(t, _)| *t)
+    }
+
+    /// Seconds after `from` until the fine attitude is back within 3σ.
+    fn recovery(&self, from: f64) -> Option<f64> {
+        attitude_recovery(&self.record.samples, from, RECOVERY_HOLD_S)
+    }
+}
+
+/// The first satellite setting below the mask after `after_s`.
+fn satellite_setting(ev: &Events, after_s: f64) -> Option<FaultOutcome> {
+    let &(ts, prn, _) = ev
+        .record
+        .horizon
+        .iter()
+        .find(|(t, _, rises)| *t > after_s && !rises)?;
+    let lost = ev.find(
+        ts - WINDOW.lost_before,
+        ts + WINDOW.lost,
+        &|e| matches!(e, ReceiverEvent::SatelliteLost { prn: p, .. } if *p == prn),
+    );
+    let att = ev.recovery(ts);
+    Some(FaultOutcome {
+        name: "satellite setting".into(),
+        detected: lost.is_some(),
+        recovered_s: lost.zip(att).map(|(l, a)| (l - ts).max(a)),
+        at_s: ts,
+        detail: format!(
+            "PRN {prn} set below the 10° mask at {ts:.1} s; channel lost and slot released {} s later; fine attitude within 3σ after {} s",
+            never_or(lost, |l| format!("{:.2}", l - ts)),
+            never_or(att, |a| format!("{a:.1}"))
+        ),
+    })
+}
+
+/// The first satellite rising above the mask after `after_s`.
+fn satellite_rising(ev: &Events, after_s: f64) -> Option<FaultOutcome> {
+    let &(tr, prn, _) = ev
+        .record
+        .horizon
+        .iter()
+        .find(|(t, _, rises)| *t > after_s && *rises)?;
+    let acquired = ev.find(
+        tr,
+        tr + WINDOW.acquired,
+        &|e| matches!(e, ReceiverEvent::SatelliteAcquired { prn: p, .. } if *p == prn),
+    );
+    let fixed = ev.find(
+        tr,
+        tr + WINDOW.fixed,
+        &|e| matches!(e, ReceiverEvent::AmbiguityFixed { prn: p, .. } if *p == prn),
+    );
+    Some(FaultOutcome {
+        name: "satellite rising".into(),
+        detected: acquired.is_some(),
+        recovered_s: fixed.map(|f| f - tr),
+        at_s: tr,
+        detail: format!(
+            "PRN {prn} rose above the mask at {tr:.1} s; first observation {} s later, ambiguities fixed from the fine attitude (satellite in every stage) {} s later",
+            never_or(acquired, |a| format!("{:.2}", a - tr)),
+            never_or(fixed, |f| format!("{:.2}", f - tr))
+        ),
+    })
+}
+
+/// An antenna blockage: detected, coasted on the gyro, restored.
+fn blockage(ev: &Events, b: &super::world::Blockage) -> FaultOutcome {
+    let antenna = b.antenna as u8;
+    let blocked = ev.find(
+        b.start,
+        b.start + WINDOW.blocked,
+        &|e| matches!(e, ReceiverEvent::AntennaBlocked { antenna: a, .. } if *a == antenna),
+    );
+    let restored = ev.find(
+        b.end,
+        b.end + WINDOW.restored,
+        &|e| matches!(e, ReceiverEvent::AntennaRestored { antenna: a, .. } if *a == antenna),
+    );
+    let att = ev.recovery(b.end);
+    let worst = ev
+        .record
+        .samples
+        .iter()
+        .filter(|s| s.t >= b.start && s.t < b.end)
+        .map(|s| s.error.amax())
+        .fold(0.0f64, f64::max)
+        .to_degrees();
+    FaultOutcome {
+        name: format!(
+            "antenna {} blocked for {:.0} s",
+            ANTENNA[b.antenna.min(2)],
+            b.end - b.start
+        ),
+        detected: blocked.is_some(),
+        recovered_s: restored.zip(att).map(|(r, a)| (r - b.end).max(a)),
+        at_s: b.start,
+        detail: format!(
+            "detected {} ms after the start (signal power); gyro coast, largest error {worst:.4}°; restored {} s after the end; fine attitude within 3σ after {} s",
+            never_or(blocked, |t| format!("{:.0}", (t - b.start) * 1e3)),
+            never_or(restored, |t| format!("{:.2}", t - b.end)),
+            never_or(att, |a| format!("{a:.1}"))
+        ),
+    }
+}
+
+/// A one-cycle slip: found against the fine attitude and repaired.
+fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutcome {
+    let (ts, antenna, prn) = (slip.start_s, slip.antenna, slip.prn);
+    let found = ev
+        .record
+        .events
+        .iter()
+        .find(|(t, e)| {
+            *t >= ts
+                && *t <= ts + WINDOW.slip_found
+                && matches!(e, ReceiverEvent::CycleSlip { prn: p, antenna: a, .. } if *p == prn && usize::from(*a) == antenna)
+        })
+        .copied();
+    let att = ev.recovery(ts);
+    let path = if ts < ev.record.sample_level_s {
+        "in the samples"
+    } else {
+        "on the fast path"
+    };
+    FaultOutcome {
+        name: format!("cycle slip ({path})"),
+        detected: found.is_some(),
+        recovered_s: found.map(|(t, _)| t - ts).zip(att).map(|(s, a)| s.max(a)),
+        at_s: ts,
+        detail: format!(
+            "PRN {prn}, antenna {}: carrier turned by one cycle in 4 ms; {}",
+            ANTENNA[antenna.min(2)],
+            match found {
+                Some((t, ReceiverEvent::CycleSlip { cycles, .. })) => format!(
+                    "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
+                    t - ts
+                ),
+                _ => "not detected".into(),
+            }
+        ),
+    }
+}
+
+/// A data-bit transition at the wrong moment.
+fn bit_flip(ev: &Events, plan: &super::run::FaultPlan) -> Option<FaultOutcome> {
+    let (tf, prn) = (
+        ev.record.bit_flip_s.or(plan.bit_flip)?,
+        ev.record.bit_flip_prn?,
+    );
+    let seen = ev.find(
+        tf,
+        tf + WINDOW.bit_flagged,
+        &|e| matches!(e, ReceiverEvent::BitAnomaly { prn: p, .. } if *p == prn),
+    );
+    Some(FaultOutcome {
+        name: "data-bit flip at the wrong moment".into(),
+        detected: seen.is_some(),
+        recovered_s: ev.recovery(tf),
+        at_s: tf,
+        detail: format!(
+            "PRN {prn}: bit transition half a bit after an edge, {:.1} ms into a code period; {}; the fine filter averages the bit out of every epoch",
+            (tf * 1e3) % 1.0,
+            seen.map_or("not flagged".into(), |t| format!("flagged {:.0} ms later", (t - tf) * 1e3))
+        ),
+    })
+}
+
 /// The outcome of every injected or natural fault of the flight.
 pub fn evaluate_faults(
     record: &FlightRecord,
     plan: &super::run::FaultPlan,
     after_s: f64,
 ) -> Vec<FaultOutcome> {
-    let mut out = Vec::new();
-    let samples = &record.samples;
-    let find = |from: f64, to: f64, pred: &dyn Fn(&ReceiverEvent) -> bool| {
-        record
-            .events
-            .iter()
-            .find(|(t, e)| *t >= from && *t <= to && pred(e))
-            .map(|(t, _)| *t)
-    };
-    // a satellite setting and one rising (natural, the first after `after_s`)
-    if let Some(&(ts, prn, _)) = record
-        .horizon
-        .iter()
-        .find(|(t, _, rises)| *t > after_s && !rises)
-    {
-        let lost = find(
-            ts - 0.2,
-            ts + 3.0,
-            &|e| matches!(e, ReceiverEvent::SatelliteLost { prn: p, .. } if *p == prn),
-        );
-        let att = attitude_recovery(samples, ts, 1.0);
-        out.push(FaultOutcome {
-            name: "satellite setting".into(),
-            detected: lost.is_some(),
-            recovered_s: lost.zip(att).map(|(l, a)| (l - ts).max(a)),
-            at_s: ts,
-            detail: format!(
-                "PRN {prn} set below the 10° mask at {ts:.1} s; channel lost and slot released {} s later; fine attitude within 3σ after {} s",
-                lost.map_or("never".into(), |l| format!("{:.2}", l - ts)),
-                att.map_or("never".into(), |a| format!("{a:.1}"))
-            ),
-        });
-    }
-    if let Some(&(tr, prn, _)) = record
-        .horizon
-        .iter()
-        .find(|(t, _, rises)| *t > after_s && *rises)
-    {
-        let acquired = find(
-            tr,
-            tr + 10.0,
-            &|e| matches!(e, ReceiverEvent::SatelliteAcquired { prn: p, .. } if *p == prn),
-        );
-        let fixed = find(
-            tr,
-            tr + 20.0,
-            &|e| matches!(e, ReceiverEvent::AmbiguityFixed { prn: p, .. } if *p == prn),
-        );
-        out.push(FaultOutcome {
-            name: "satellite rising".into(),
-            detected: acquired.is_some(),
-            recovered_s: fixed.map(|f| f - tr),
-            at_s: tr,
-            detail: format!(
-                "PRN {prn} rose above the mask at {tr:.1} s; first observation {} s later, ambiguities fixed from the fine attitude (satellite in every stage) {} s later",
-                acquired.map_or("never".into(), |a| format!("{:.2}", a - tr)),
-                fixed.map_or("never".into(), |f| format!("{:.2}", f - tr))
-            ),
-        });
-    }
-    for b in &plan.blockages {
-        let antenna = b.antenna as u8;
-        let blocked = find(
-            b.start,
-            b.start + 1.0,
-            &|e| matches!(e, ReceiverEvent::AntennaBlocked { antenna: a, .. } if *a == antenna),
-        );
-        let restored = find(
-            b.end,
-            b.end + 5.0,
-            &|e| matches!(e, ReceiverEvent::AntennaRestored { antenna: a, .. } if *a == antenna),
-        );
-        let att = attitude_recovery(samples, b.end, 1.0);
-        let coast: Vec<&Sample> = samples
-            .iter()
-            .filter(|s| s.t >= b.start && s.t < b.end)
-            .collect();
-        let worst = coast
-            .iter()
-            .map(|s| s.error.amax())
-            .fold(0.0f64, f64::max)
-            .to_degrees();
-        out.push(FaultOutcome {
-            name: format!("antenna {} blocked for {:.0} s", ["A", "B", "C"][b.antenna.min(2)], b.end - b.start),
-            detected: blocked.is_some(),
-            recovered_s: restored.zip(att).map(|(r, a)| (r - b.end).max(a)),
-            at_s: b.start,
-            detail: format!(
-                "detected {} ms after the start (signal power); gyro coast, largest error {worst:.4}°; restored {} s after the end; fine attitude within 3σ after {} s",
-                blocked.map_or("never".into(), |t| format!("{:.0}", (t - b.start) * 1e3)),
-                restored.map_or("never".into(), |t| format!("{:.2}", t - b.end)),
-                att.map_or("never".into(), |a| format!("{a:.1}"))
-            ),
-        });
-    }
-    for slip in &record.slips {
-        let (ts, antenna, prn) = (slip.start_s, slip.antenna, slip.prn);
-        let found = record
-            .events
-            .iter()
-            .find(|(t, e)| {
-                *t >= ts
-                    && *t <= ts + 3.0
-                    && matches!(e, ReceiverEvent::CycleSlip { prn: p, antenna: a, .. } if *p == prn && usize::from(*a) == antenna)
-            })
-            .copied();
-        let att = attitude_recovery(samples, ts, 1.0);
-        let path = if ts < record.sample_level_s {
-            "in the samples"
-        } else {
-            "on the fast path"
-        };
-        out.push(FaultOutcome {
-            name: format!("cycle slip ({path})"),
-            detected: found.is_some(),
-            recovered_s: found.map(|(t, _)| t - ts).zip(att).map(|(s, a)| s.max(a)),
-            at_s: ts,
-            detail: format!(
-                "PRN {prn}, antenna {}: carrier turned by one cycle in 4 ms; {}",
-                ["A", "B", "C"][antenna.min(2)],
-                match found {
-                    Some((t, ReceiverEvent::CycleSlip { cycles, .. })) => format!(
-                        "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
-                        t - ts
-                    ),
-                    _ => "not detected".into(),
-                }
-            ),
-        });
-    }
-    if let (Some(tf), Some(prn)) = (record.bit_flip_s.or(plan.bit_flip), record.bit_flip_prn) {
-        let seen = find(
-            tf,
-            tf + 0.1,
-            &|e| matches!(e, ReceiverEvent::BitAnomaly { prn: p, .. } if *p == prn),
-        );
-        let att = attitude_recovery(samples, tf, 1.0);
-        out.push(FaultOutcome {
-            name: "data-bit flip at the wrong moment".into(),
-            detected: seen.is_some(),
-            recovered_s: att,
-            at_s: tf,
-            detail: format!(
-                "PRN {prn}: bit transition half a bit after an edge, {:.1} ms into a code period; {}; the fine filter averages the bit out of every epoch",
-                (tf * 1e3) % 1.0,
-                seen.map_or("not flagged".into(), |t| format!("flagged {:.0} ms later", (t - tf) * 1e3))
-            ),
-        });
-    }
+    let ev = Events { record };
+    let mut out: Vec<FaultOutcome> = satellite_setting(&ev, after_s)
+        .into_iter()
+        .chain(satellite_rising(&ev, after_s))
+        .collect();
+    out.extend(plan.blockages.iter().map(|b| blockage(&ev, b)));
+    out.extend(record.slips.iter().map(|s| cycle_slip(&ev, s)));
+    out.extend(bit_flip(&ev, plan));
     out
 }

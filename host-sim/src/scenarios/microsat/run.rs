@@ -192,9 +192,8 @@ pub fn receiver_config(world: &World, loop_bandwidth_hz: f32) -> ReceiverConfig 
         GYRO_H as f32,
         GyroErrors::mems().pulse_weight.map(|p| p as f32),
     );
+    // the line biases are unknown to the receiver: it resolves and estimates them
     let mut c = ReceiverConfig::gps_l1(antennas, Some(gyro));
-    let b = world.line_bias_rad;
-    c.line_bias_rad = [(b[1] - b[0]) as f32, (b[2] - b[0]) as f32];
     c.fine.loop_bandwidth_hz = loop_bandwidth_hz;
     c
 }
@@ -210,265 +209,428 @@ fn interpolate(a: &GpsView, b: &GpsView, f: f64) -> GpsView {
     v
 }
 
+/// Two estimates closer than this are of the same epoch, s.
+const SAME_EPOCH_S: f64 = 1e-9;
+/// Gyro increments per call (two-sample propagation).
+const GYRO_SUBSAMPLES: usize = 2;
+/// Duration of an injected cycle slip (the carrier turns by one cycle over it), s.
+const SLIP_DURATION_S: f64 = 0.004;
+/// Size of an injected cycle slip, cycles.
+const SLIP_CYCLES: f64 = 1.0;
+/// Epochs between two sky-plot points (1 s).
+const SKY_EVERY_EPOCHS: u64 = 1000;
+/// Extra seconds of samples synthesized beyond the sample-level stretch.
+const SAMPLE_MARGIN_S: f64 = 0.5;
+/// Seed salt of the gyro's noise.
+const GYRO_SEED_SALT: u64 = 0x6779;
+
 /// Runs one flight: the sample-level chain for the first [`FlightConfig::sample_level_s`],
 /// then the fast path from the channels it hands over.
 pub fn fly(
     config: &FlightConfig,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<FlightRecord> {
-    let mut world = World::new(
-        config.motion,
-        config.u0,
-        config.gps_offset_s,
-        config.detumble_rates,
-    );
-    world.blockages = config.faults.blockages.clone();
-    let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
-    let mut rx = Box::new(
-        Front::new(rcfg, SampleLevel::front_config())
-            .map_err(|e| anyhow::anyhow!("receiver: {e}"))?,
-    );
-    let mut gyro = Gyro::new(GyroErrors::mems(), config.seed ^ 0x6779);
-    let mut rng = rng(config.seed);
-    let mut channels: BTreeMap<u8, EmulatedChannel> = BTreeMap::new();
-    for e in world.sky.almanac.entries.iter().filter(|e| e.health == 0) {
-        channels.insert(e.prn, EmulatedChannel::new(e.prn, &mut rng));
-    }
-    let mut record = FlightRecord {
-        sample_level_s: config.sample_level_s,
-        ..FlightRecord::default()
-    };
-    let sample_epochs = (config.sample_level_s / EPOCH_S).round() as u64;
-    // the slips inside the sample-level stretch go into the scene, on the highest satellite
-    for &(ts, antenna) in &config.faults.cycle_slips {
-        if ts < config.sample_level_s {
-            if let Some(prn) = highest(&world.satellites(ts)) {
-                record.slips.push(SampleSlip {
-                    start_s: ts,
-                    antenna,
-                    prn,
-                });
-            }
-        }
-    }
-    let mut sample_level = if sample_epochs > 0 {
-        Some(SampleLevel::new(
-            &world,
-            config.sample_level_s + 0.5,
-            config.seed,
-            &record.slips,
-        ))
-    } else {
-        None
-    };
+    let mut flight = Flight::new(config)?;
     let epochs = (config.duration_s / EPOCH_S).round() as u64;
-    let per_block = (AIDING_S / EPOCH_S).round() as u64;
-    let mut views: (Vec<GpsView>, Vec<GpsView>) = (Vec::new(), Vec::new());
-    let mut was_visible: BTreeMap<u8, bool> = BTreeMap::new();
-    let started = std::time::Instant::now();
     for k in 0..epochs {
-        let t0 = k as f64 * EPOCH_S;
-        let tc = t0 + 0.5 * EPOCH_S;
-        if k == sample_epochs {
-            // hand-over: the chain's locked satellites continue on the fast path
-            if let Some(sl) = sample_level.take() {
-                for prn in locked(&rx) {
-                    if let Some(ch) = channels.get_mut(&prn) {
-                        ch.continue_tracking();
-                        if let Some(edge) = sl.next_bit_edge_epoch(prn, t0) {
-                            ch.align_bit_edges(edge);
-                        }
-                    }
-                }
-                // the fast path takes over: the core's channels close
-                let prns: Vec<u8> = rx.channels().map(|c| c.prn.number()).collect();
-                for p in prns.into_iter().filter_map(Prn::new) {
-                    rx.release(p);
-                }
-                record.sample_stats = Some(sl.stats().clone());
-                record.wall_s.0 = started.elapsed().as_secs_f64();
-            }
-        }
-        let in_samples = k < sample_epochs;
-        // gyro: the increment over [t0 − h, t0] before the epoch starting at t0
-        let gyro_every = (GYRO_H / EPOCH_S).round() as u64;
-        if k > 0 && k % gyro_every == 0 {
-            let inc = gyro.increment(&world.motion, t0 - GYRO_H, GYRO_H, 2);
-            if let Some(p) = inc.pulses {
-                rx.receiver_mut()
-                    .push_gyro_pulses(p)
-                    .map_err(|e| anyhow::anyhow!("gyro: {e}"))?;
-            }
-        }
-        if k % per_block == 0 {
-            let t1 = t0 + AIDING_S;
-            let a: Vec<GpsView> = world.sky.views(t0);
-            let b: Vec<GpsView> = world.sky.views(t1);
-            views = (a, b);
-        }
-        let f = (tc - (k - k % per_block) as f64 * EPOCH_S) / AIDING_S;
-        let c_ib = world.c_ib(tc);
-        let mut truths: Vec<SatTruth> = Vec::new();
-        for (a, b) in views.0.iter().zip(views.1.iter()) {
-            if a.occulted && b.occulted {
-                continue;
-            }
-            let v = interpolate(a, b, f);
-            truths.push(world.antenna_view(&v, &c_ib, tc));
-        }
-        // faults go to the highest satellite at their time
-        if k % per_block == 0 {
-            for &(ts, antenna) in &config.faults.cycle_slips {
-                if ts >= config.sample_level_s && t0 + AIDING_S > ts && t0 <= ts {
-                    if let Some(best) = highest(&truths) {
-                        if let Some(ch) = channels.get_mut(&best) {
-                            ch.transients.push(PhaseTransient {
-                                antenna,
-                                start_s: ts,
-                                duration_s: 0.004,
-                                cycles: 1.0,
-                            });
-                        }
-                        record.slips.push(SampleSlip {
-                            start_s: ts,
-                            antenna,
-                            prn: best,
-                        });
-                    }
-                }
-            }
-            if let Some(tf) = config.faults.bit_flip {
-                if record.bit_flip_prn.is_none() && t0 + AIDING_S >= tf && t0 <= tf {
-                    if let Some(best) = highest(&truths) {
-                        if let Some(ch) = channels.get_mut(&best) {
-                            record.bit_flip_s = Some(ch.schedule_bit_flip(tf));
-                        }
-                        record.bit_flip_prn = Some(best);
-                    }
-                }
-            }
-        }
-        // channel lives, horizon crossings
-        for s in &truths {
-            let sees = s.elevation[0] >= super::world::MASK_RAD && !s.view.occulted;
-            let before = was_visible.insert(s.view.prn, sees).unwrap_or(sees);
-            if before != sees && k > 0 {
-                record.horizon.push((tc, s.view.prn, sees));
-            }
-            if in_samples {
-                continue;
-            }
-            if let Some(ch) = channels.get_mut(&s.view.prn) {
-                ch.advance(tc, s.visible[0]);
-            }
-        }
-        // aiding for the channels that deliver or search, highest first
-        if k % per_block == 0 {
-            let mut wanted: Vec<&SatTruth> = truths
-                .iter()
-                .filter(|s| match &sample_level {
-                    Some(_) if in_samples => Prn::new(s.view.prn).is_some_and(|p| rx.tracks(p)),
-                    _ => channels
-                        .get(&s.view.prn)
-                        .is_some_and(|c| c.state != ChannelState::Idle),
-                })
-                .collect();
-            wanted.sort_by(|a, b| b.elevation[0].total_cmp(&a.elevation[0]));
-            wanted.truncate(MAX_SATELLITES);
-            let aiding: Vec<SatelliteAiding> = wanted
-                .iter()
-                .map(|s| {
-                    let prn = s.view.prn;
-                    let (a, b) = (
-                        views.0.iter().find(|v| v.prn == prn),
-                        views.1.iter().find(|v| v.prn == prn),
-                    );
-                    let rate = match (a, b) {
-                        (Some(a), Some(b)) => (b.los - a.los) / AIDING_S,
-                        _ => Vector3::zeros(),
-                    };
-                    let los = a.map_or(s.view.los, |a| a.los);
-                    SatelliteAiding {
-                        prn,
-                        epoch: k,
-                        los: [los.x as f32, los.y as f32, los.z as f32],
-                        los_rate: [rate.x as f32, rate.y as f32, rate.z as f32],
-                    }
-                })
-                .collect();
-            rx.receiver_mut()
-                .set_aiding(&aiding)
-                .map_err(|e| anyhow::anyhow!("aiding: {e}"))?;
-        }
-        // observations
-        let line_bias = world.line_bias_rad;
-        let mut tracked = 0;
-        if let (Some(sl), true) = (sample_level.as_mut(), in_samples) {
-            tracked += sl.epoch(k, &mut rx)?.observations as usize;
-        }
-        for s in truths.iter().filter(|_| !in_samples) {
-            let Some(ch) = channels.get_mut(&s.view.prn) else {
-                continue;
-            };
-            if !ch.delivering() {
-                continue;
-            }
-            let psi = [0, 1, 2].map(|p| world.geometric_phase(p, &s.view.los, &c_ib));
-            let obs = ch.observe(k, tc, s, psi, line_bias, &mut rng);
-            match rx.receiver_mut().push_observation(k, &obs) {
-                Ok(()) => tracked += 1,
-                Err(gnss_attitude::ReceiverError::NoAiding) => {}
-                Err(e) => anyhow::bail!("observation: {e}"),
-            }
-        }
-        // records
-        if (k + 1) % per_block == 0 {
-            record_sample(&mut record, rx.receiver(), &world, &gyro, &truths, tracked);
-            while let Some(e) = rx.receiver_mut().pop_event() {
-                record.events.push(((e.epoch() as f64 + 0.5) * EPOCH_S, e));
-            }
-            if (k + 1) % 1000 == 0 {
-                for s in &truths {
-                    let ch = channels.get(&s.view.prn);
-                    let (delivering, reported) = match &sample_level {
-                        Some(_) if in_samples => {
-                            let r = reported_cn0_dbhz(&rx, s.view.prn);
-                            (r.is_some(), r.unwrap_or(0.0))
-                        }
-                        _ => (
-                            ch.is_some_and(|c| c.delivering()),
-                            ch.map_or(0.0, |c| c.reported_cn0_dbhz()),
-                        ),
-                    };
-                    if s.elevation[0] > 0.0 {
-                        record.sky.push(SkyPoint {
-                            t: tc,
-                            prn: s.view.prn,
-                            azimuth: s.azimuth,
-                            elevation: s.elevation[0],
-                            cn0_dbhz: if delivering { reported } else { 0.0 },
-                            tracked: delivering,
-                        });
-                    }
-                }
-            }
+        flight.epoch(k)?;
+        if (k + 1) % flight.per_block == 0 {
             if let Some(p) = progress {
                 p.set_position(((k + 1) as f64 * EPOCH_S) as u64);
             }
         }
     }
-    record.wall_s.1 = started.elapsed().as_secs_f64() - record.wall_s.0;
-    if let Some(sl) = sample_level {
-        record.sample_stats = Some(sl.stats().clone());
+    Ok(flight.finish())
+}
+
+/// The state of a flight between epochs: the world, the receiver and its inputs, the
+/// emulated channels of the fast path, the sample-level chain while it runs, the records.
+struct Flight<'a> {
+    config: &'a FlightConfig,
+    world: World,
+    rx: Box<Front>,
+    gyro: Gyro,
+    rng: rand_chacha::ChaCha8Rng,
+    channels: BTreeMap<u8, EmulatedChannel>,
+    record: FlightRecord,
+    /// The sample-level chain, until the hand-over.
+    sample_level: Option<SampleLevel>,
+    /// Epochs of the sample-level stretch.
+    sample_epochs: u64,
+    /// Epochs per aiding update (and record).
+    per_block: u64,
+    /// The satellites' views at the start and the end of the current aiding block.
+    views: (Vec<GpsView>, Vec<GpsView>),
+    /// Whether each satellite was above the reference antenna's mask.
+    was_visible: BTreeMap<u8, bool>,
+    started: std::time::Instant,
+}
+
+/// One epoch's truth: its start and centre, the body attitude, the satellites in view.
+struct EpochTruth {
+    k: u64,
+    t0: f64,
+    tc: f64,
+    c_ib: Matrix3<f64>,
+    truths: Vec<SatTruth>,
+    in_samples: bool,
+}
+
+impl<'a> Flight<'a> {
+    fn new(config: &'a FlightConfig) -> Result<Self> {
+        let mut world = World::new(
+            config.motion,
+            config.u0,
+            config.gps_offset_s,
+            config.detumble_rates,
+        );
+        world.blockages = config.faults.blockages.clone();
+        let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
+        let rx = Box::new(
+            Front::new(rcfg, SampleLevel::front_config())
+                .map_err(|e| anyhow::anyhow!("receiver: {e}"))?,
+        );
+        let gyro = Gyro::new(GyroErrors::mems(), config.seed ^ GYRO_SEED_SALT);
+        let mut rng = rng(config.seed);
+        let mut channels: BTreeMap<u8, EmulatedChannel> = BTreeMap::new();
+        for e in world.sky.almanac.entries.iter().filter(|e| e.health == 0) {
+            channels.insert(e.prn, EmulatedChannel::new(e.prn, &mut rng));
+        }
+        let mut record = FlightRecord {
+            sample_level_s: config.sample_level_s,
+            ..FlightRecord::default()
+        };
+        let sample_epochs = (config.sample_level_s / EPOCH_S).round() as u64;
+        record.slips = sample_slips(config, &world);
+        let sample_level = (sample_epochs > 0).then(|| {
+            SampleLevel::new(
+                &world,
+                config.sample_level_s + SAMPLE_MARGIN_S,
+                config.seed,
+                &record.slips,
+            )
+        });
+        Ok(Self {
+            config,
+            world,
+            rx,
+            gyro,
+            rng,
+            channels,
+            record,
+            sample_level,
+            sample_epochs,
+            per_block: (AIDING_S / EPOCH_S).round() as u64,
+            views: (Vec::new(), Vec::new()),
+            was_visible: BTreeMap::new(),
+            started: std::time::Instant::now(),
+        })
     }
-    record.calibration = rx.receiver_mut().gyro_calibration();
-    let b = gyro.current_errors();
-    let est = rx.receiver_mut().gyro_bias();
-    record.gyro_bias = (
-        Vector3::new(b[6], b[7], b[8]),
-        Vector3::new(f64::from(est[0]), f64::from(est[1]), f64::from(est[2])),
+
+    /// Epoch `k`: hand-over, gyro, truth, faults, channels, aiding, observations, records.
+    fn epoch(&mut self, k: u64) -> Result<()> {
+        let t0 = k as f64 * EPOCH_S;
+        if k == self.sample_epochs {
+            self.hand_over(t0);
+        }
+        self.push_gyro(k, t0)?;
+        let block_start = k % self.per_block == 0;
+        if block_start {
+            self.views = (
+                self.world.sky.views(t0),
+                self.world.sky.views(t0 + AIDING_S),
+            );
+        }
+        let e = self.truth(k, t0);
+        if block_start {
+            self.inject_faults(&e);
+        }
+        self.advance_channels(&e);
+        if block_start {
+            self.set_aiding(&e)?;
+        }
+        let tracked = self.observe(&e)?;
+        if (k + 1) % self.per_block == 0 {
+            self.record_block(&e, tracked);
+        }
+        Ok(())
+    }
+
+    /// The hand-over: the chain's locked satellites continue on the fast path, the core's
+    /// channels close.
+    fn hand_over(&mut self, t0: f64) {
+        let Some(sl) = self.sample_level.take() else {
+            return;
+        };
+        for prn in locked(&self.rx) {
+            if let Some(ch) = self.channels.get_mut(&prn) {
+                ch.continue_tracking();
+                if let Some(edge) = sl.next_bit_edge_epoch(prn, t0) {
+                    ch.align_bit_edges(edge);
+                }
+            }
+        }
+        let prns: Vec<u8> = self.rx.channels().map(|c| c.prn.number()).collect();
+        for p in prns.into_iter().filter_map(Prn::new) {
+            self.rx.release(p);
+        }
+        self.record.sample_stats = Some(sl.stats().clone());
+        self.record.wall_s.0 = self.started.elapsed().as_secs_f64();
+    }
+
+    /// The gyro increment over `[t0 − h, t0]` before the epoch starting at `t0`.
+    fn push_gyro(&mut self, k: u64, t0: f64) -> Result<()> {
+        let gyro_every = (GYRO_H / EPOCH_S).round() as u64;
+        if k > 0 && k % gyro_every == 0 {
+            let inc = self
+                .gyro
+                .increment(&self.world.motion, t0 - GYRO_H, GYRO_H, GYRO_SUBSAMPLES);
+            if let Some(p) = inc.pulses {
+                self.rx
+                    .receiver_mut()
+                    .push_gyro_pulses(p)
+                    .map_err(|e| anyhow::anyhow!("gyro: {e}"))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The satellites not occulted at the epoch's centre, interpolated within the block.
+    fn truth(&self, k: u64, t0: f64) -> EpochTruth {
+        let tc = t0 + 0.5 * EPOCH_S;
+        let f = (tc - (k - k % self.per_block) as f64 * EPOCH_S) / AIDING_S;
+        let c_ib = self.world.c_ib(tc);
+        let truths = self
+            .views
+            .0
+            .iter()
+            .zip(self.views.1.iter())
+            .filter(|(a, b)| !(a.occulted && b.occulted))
+            .map(|(a, b)| self.world.antenna_view(&interpolate(a, b, f), &c_ib, tc))
+            .collect();
+        EpochTruth {
+            k,
+            t0,
+            tc,
+            c_ib,
+            truths,
+            in_samples: k < self.sample_epochs,
+        }
+    }
+
+    /// Cycle slips (after the sample-level stretch) and the bit flip go to the highest
+    /// satellite at their time.
+    fn inject_faults(&mut self, e: &EpochTruth) {
+        let (t0, faults) = (e.t0, &self.config.faults);
+        for &(ts, antenna) in &faults.cycle_slips {
+            if ts < self.config.sample_level_s || t0 + AIDING_S <= ts || t0 > ts {
+                continue;
+            }
+            let Some(best) = highest(&e.truths) else {
+                continue;
+            };
+            if let Some(ch) = self.channels.get_mut(&best) {
+                ch.transients.push(PhaseTransient {
+                    antenna,
+                    start_s: ts,
+                    duration_s: SLIP_DURATION_S,
+                    cycles: SLIP_CYCLES,
+                });
+            }
+            self.record.slips.push(SampleSlip {
+                start_s: ts,
+                antenna,
+                prn: best,
+            });
+        }
+        if let Some(tf) = faults.bit_flip {
+            if self.record.bit_flip_prn.is_none() && t0 + AIDING_S >= tf && t0 <= tf {
+                if let Some(best) = highest(&e.truths) {
+                    if let Some(ch) = self.channels.get_mut(&best) {
+                        self.record.bit_flip_s = Some(ch.schedule_bit_flip(tf));
+                    }
+                    self.record.bit_flip_prn = Some(best);
+                }
+            }
+        }
+    }
+
+    /// Horizon crossings, and the emulated channels' lives on the fast path.
+    fn advance_channels(&mut self, e: &EpochTruth) {
+        for s in &e.truths {
+            let sees = s.elevation[0] >= super::world::MASK_RAD && !s.view.occulted;
+            let before = self.was_visible.insert(s.view.prn, sees).unwrap_or(sees);
+            if before != sees && e.k > 0 {
+                self.record.horizon.push((e.tc, s.view.prn, sees));
+            }
+            if e.in_samples {
+                continue;
+            }
+            if let Some(ch) = self.channels.get_mut(&s.view.prn) {
+                ch.advance(e.tc, s.visible[0]);
+            }
+        }
+    }
+
+    /// Aiding for the channels that deliver or search, highest first.
+    fn set_aiding(&mut self, e: &EpochTruth) -> Result<()> {
+        let samples = self.sample_level.is_some() && e.in_samples;
+        let mut wanted: Vec<&SatTruth> = e
+            .truths
+            .iter()
+            .filter(|s| {
+                if samples {
+                    Prn::new(s.view.prn).is_some_and(|p| self.rx.tracks(p))
+                } else {
+                    self.channels
+                        .get(&s.view.prn)
+                        .is_some_and(|c| c.state != ChannelState::Idle)
+                }
+            })
+            .collect();
+        wanted.sort_by(|a, b| b.elevation[0].total_cmp(&a.elevation[0]));
+        wanted.truncate(MAX_SATELLITES);
+        let aiding: Vec<SatelliteAiding> = wanted
+            .iter()
+            .map(|s| aiding_for(s, &self.views, e.k))
+            .collect();
+        self.rx
+            .receiver_mut()
+            .set_aiding(&aiding)
+            .map_err(|e| anyhow::anyhow!("aiding: {e}"))
+    }
+
+    /// The epoch's observations (from the samples or the fast path); returns how many the
+    /// receiver took.
+    fn observe(&mut self, e: &EpochTruth) -> Result<usize> {
+        let mut tracked = 0;
+        if let (Some(sl), true) = (self.sample_level.as_mut(), e.in_samples) {
+            tracked += sl.epoch(e.k, &mut self.rx)?.observations as usize;
+        }
+        if e.in_samples {
+            return Ok(tracked);
+        }
+        let line_bias = self.world.line_bias_rad;
+        for s in &e.truths {
+            let Some(ch) = self.channels.get_mut(&s.view.prn) else {
+                continue;
+            };
+            if !ch.delivering() {
+                continue;
+            }
+            let psi = [0, 1, 2].map(|p| self.world.geometric_phase(p, &s.view.los, &e.c_ib));
+            let obs = ch.observe(e.k, e.tc, s, psi, line_bias, &mut self.rng);
+            match self.rx.receiver_mut().push_observation(e.k, &obs) {
+                Ok(()) => tracked += 1,
+                Err(gnss_attitude::receiver::ReceiverError::NoAiding) => {}
+                Err(err) => anyhow::bail!("observation: {err}"),
+            }
+        }
+        Ok(tracked)
+    }
+
+    /// The records at the end of an aiding block: the sample, the events, the sky points.
+    fn record_block(&mut self, e: &EpochTruth, tracked: usize) {
+        record_sample(
+            &mut self.record,
+            self.rx.receiver(),
+            &self.world,
+            &self.gyro,
+            &e.truths,
+            tracked,
+        );
+        while let Some(ev) = self.rx.receiver_mut().pop_event() {
+            self.record
+                .events
+                .push(((ev.epoch() as f64 + 0.5) * EPOCH_S, ev));
+        }
+        if (e.k + 1) % SKY_EVERY_EPOCHS == 0 {
+            self.record_sky(e);
+        }
+    }
+
+    /// One sky-plot point per satellite above the reference antenna's horizon.
+    fn record_sky(&mut self, e: &EpochTruth) {
+        let samples = self.sample_level.is_some() && e.in_samples;
+        for s in &e.truths {
+            let ch = self.channels.get(&s.view.prn);
+            let (delivering, reported) = if samples {
+                let r = reported_cn0_dbhz(&self.rx, s.view.prn);
+                (r.is_some(), r.unwrap_or(0.0))
+            } else {
+                (
+                    ch.is_some_and(|c| c.delivering()),
+                    ch.map_or(0.0, |c| c.reported_cn0_dbhz()),
+                )
+            };
+            if s.elevation[0] > 0.0 {
+                self.record.sky.push(SkyPoint {
+                    t: e.tc,
+                    prn: s.view.prn,
+                    azimuth: s.azimuth,
+                    elevation: s.elevation[0],
+                    cn0_dbhz: if delivering { reported } else { 0.0 },
+                    tracked: delivering,
+                });
+            }
+        }
+    }
+
+    /// The wall times, the sample-level statistics, the gyro calibration at the end.
+    fn finish(mut self) -> FlightRecord {
+        let mut record = std::mem::take(&mut self.record);
+        record.wall_s.1 = self.started.elapsed().as_secs_f64() - record.wall_s.0;
+        if let Some(sl) = &self.sample_level {
+            record.sample_stats = Some(sl.stats().clone());
+        }
+        record.calibration = self.rx.receiver_mut().gyro_calibration();
+        let b = self.gyro.current_errors();
+        let est = self.rx.receiver_mut().gyro_bias();
+        record.gyro_bias = (
+            Vector3::new(b[6], b[7], b[8]),
+            Vector3::new(f64::from(est[0]), f64::from(est[1]), f64::from(est[2])),
+        );
+        record
+    }
+}
+
+/// The slips inside the sample-level stretch: they go into the scene, on the highest
+/// satellite at their time.
+fn sample_slips(config: &FlightConfig, world: &World) -> Vec<SampleSlip> {
+    config
+        .faults
+        .cycle_slips
+        .iter()
+        .filter(|&&(ts, _)| ts < config.sample_level_s)
+        .filter_map(|&(ts, antenna)| {
+            highest(&world.satellites(ts)).map(|prn| SampleSlip {
+                start_s: ts,
+                antenna,
+                prn,
+            })
+        })
+        .collect()
+}
+
+/// The aiding of satellite `s` at epoch `k`: its line of sight at the block's start and the
+/// rate over the block.
+fn aiding_for(s: &SatTruth, views: &(Vec<GpsView>, Vec<GpsView>), k: u64) -> SatelliteAiding {
+    let prn = s.view.prn;
+    let (a, b) = (
+        views.0.iter().find(|v| v.prn == prn),
+        views.1.iter().find(|v| v.prn == prn),
     );
-    Ok(record)
+    let rate = match (a, b) {
+        (Some(a), Some(b)) => (b.los - a.los) / AIDING_S,
+        _ => Vector3::zeros(),
+    };
+    let los = a.map_or(s.view.los, |a| a.los);
+    SatelliteAiding {
+        prn,
+        epoch: k,
+        los: [los.x as f32, los.y as f32, los.z as f32],
+        los_rate: [rate.x as f32, rate.y as f32, rate.z as f32],
+    }
 }
 
 fn highest(truths: &[SatTruth]) -> Option<u8> {
@@ -498,29 +660,22 @@ fn record_sample(
 ) {
     let att = receiver.attitude();
     let t = (att.epoch as f64 + 0.5) * EPOCH_S;
+    super::nmea::record(&att, world, t);
     let truth = world.motion.q_ib(t);
     let has = att.source != AttitudeSource::None;
     let (fine_error, fine_locked) = match receiver.fine_estimate() {
-        Some((e, lock)) => (
+        Some(e) => (
             attitude_error(&e.q_rb, &truth),
-            lock == gnss_attitude::attitude::one_stage::LockStatus::Locked,
+            att.source == AttitudeSource::Fine,
         ),
         None => (nan3(), false),
     };
-    // the bound over the satellites the receiver can use (tracked on all three antennas)
-    let c_ib = world.c_ib(t);
-    let usable: Vec<(Vector3<f64>, f64)> = truths
-        .iter()
-        .filter(|s| s.visible == [true, true, true])
-        .map(|s| (c_ib.transpose() * s.view.los, s.cn0_dbhz[0]))
-        .collect();
-    let positions = world.antennas.map(|a| a.position);
-    let bound = bound_rad(
-        &positions,
-        &usable,
+    let bound = bound_now(
+        world,
+        truths,
+        t,
         f64::from(receiver.config().fine.loop_bandwidth_hz),
-    )
-    .unwrap_or_else(nan3);
+    );
     let h = att.health;
     let b = gyro.current_errors();
     let est = receiver.gyro_bias();
@@ -555,19 +710,41 @@ fn record_sample(
         blocked: h.antenna_blocked,
         bias_error,
     });
+    record_stages(record, receiver, world);
+}
+
+/// The bound at `t` over the satellites the receiver can use (tracked on all three antennas),
+/// rad per body axis (NaN when it is singular).
+fn bound_now(world: &World, truths: &[SatTruth], t: f64, bandwidth_hz: f64) -> Vector3<f64> {
+    let c_ib = world.c_ib(t);
+    let usable: Vec<(Vector3<f64>, f64)> = truths
+        .iter()
+        .filter(|s| s.visible == [true, true, true])
+        .map(|s| (c_ib.transpose() * s.view.los, s.cn0_dbhz[0]))
+        .collect();
+    let positions = world.antennas.map(|a| a.position);
+    bound_rad(&positions, &usable, bandwidth_hz).unwrap_or_else(nan3)
+}
+
+/// The snapshot and rigid-body estimates, each once per epoch of its own.
+fn record_stages(record: &mut FlightRecord, receiver: &AttitudeReceiver, world: &World) {
     if let Some(s) = receiver.snapshot_estimate() {
         let t = (s.epoch as f64 + 0.5) * EPOCH_S;
         if record
             .snapshots
             .last()
-            .is_none_or(|l| (l.t - t).abs() > 1e-9)
+            .is_none_or(|l| (l.t - t).abs() > SAME_EPOCH_S)
         {
             record.snapshots.push(stage_error(world, &s));
         }
     }
     if let Some(s) = receiver.rigid_body_estimate() {
         let t = (s.epoch as f64 + 0.5) * EPOCH_S;
-        if record.rigid.last().is_none_or(|l| (l.t - t).abs() > 1e-9) {
+        if record
+            .rigid
+            .last()
+            .is_none_or(|l| (l.t - t).abs() > SAME_EPOCH_S)
+        {
             record.rigid.push(stage_error(world, &s));
         }
     }

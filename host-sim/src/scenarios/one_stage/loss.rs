@@ -9,9 +9,9 @@
 //! of one 60 s run (tens of thousands of epochs, not a few hundred loop time constants).
 
 use anyhow::{anyhow, Result};
+use gnss_attitude::attitude::array::AntennaArray;
 use gnss_attitude::attitude::one_stage::{
-    AntennaArray, EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, Prior,
-    SatelliteObservation,
+    EstimatedAngles, FilterMode, OneStageConfig, OneStageFilter, Prior, SatelliteObservation,
 };
 use gnss_attitude::geometry::Paper003Angles;
 

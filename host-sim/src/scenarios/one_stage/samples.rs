@@ -16,9 +16,8 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Result};
-use gnss_attitude::attitude::one_stage::{
-    AdapterConfig, EpochClock, ObservationAdapter, SatelliteObservation,
-};
+use gnss_attitude::attitude::one_stage::SatelliteObservation;
+use gnss_attitude::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use gnss_attitude::signal::SampleFormat;
 use gnss_attitude::tracking::{AcquisitionConfig, ChannelConfig};
 use nalgebra::Matrix3;

@@ -2,9 +2,10 @@
 //! into the core filter and measures the error.
 
 use anyhow::anyhow;
+use gnss_attitude::attitude::array::AntennaArray;
 use gnss_attitude::attitude::one_stage::{
-    AntennaArray, EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
-    SatelliteObservation, StateLayout,
+    EstimatedAngles, FilterMode, LockStatus, OneStageConfig, OneStageFilter, Prior,
+    SatelliteObservation,
 };
 use gnss_attitude::geometry::Paper003Angles;
 use nalgebra::Matrix3;
@@ -212,7 +213,7 @@ pub fn simulate_with(cfg: &RunConfig, source: Box<dyn EpochSource>) -> anyhow::R
         PRIOR_RATE_SIGMA as f32,
     );
     prior.line_bias_variance = [0.25; 2];
-    match StateLayout::of(&config).dimension {
+    match config.state_dimension() {
         2 => run::<2>(cfg, source, config, array, &prior),
         4 => run::<4>(cfg, source, config, array, &prior),
         6 => run::<6>(cfg, source, config, array, &prior),

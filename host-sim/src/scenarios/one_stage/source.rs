@@ -8,8 +8,8 @@
 //!   statistics of an ideal correlator: cheap, for Monte Carlo.
 //! * [`SampleLevel`](super::samples::SampleLevel) synthesizes the three antennas' samples and
 //!   runs the core's acquisition, fixed-point correlators and tracking channels, then the
-//!   core's adapter ([`gnss_attitude::attitude::one_stage::ObservationAdapter`],
-//!   [`gnss_attitude::attitude::one_stage::EpochClock`]): samples → correlators → filter.
+//!   core's adapter ([`gnss_attitude::receiver::ObservationAdapter`],
+//!   [`gnss_attitude::receiver::EpochClock`]): samples → correlators → filter.
 //!   [`Replay`](super::samples::Replay) plays a recorded sample-level run back, so that
 //!   several filters see the same observations.
 

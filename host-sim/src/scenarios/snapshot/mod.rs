@@ -12,40 +12,39 @@
 //! * `four-antenna` ([`four_antenna`]): a 1 m tetrahedron, where the paper's formula (16) can
 //!   run, against the general solver, at carrier (4 mm) and code (0.3 m) noise.
 
-use super::{Outcome, RunContext, Scenario, Variant};
+use super::{Outcome, RunContext, Scenario, Variant, Variants};
 
 pub mod ambiguity;
 pub mod common;
 pub mod four_antenna;
 pub mod paper;
 
+/// A variant's run.
+type Runner = fn(&RunContext) -> anyhow::Result<Outcome>;
+
 /// The scenario.
 pub const SCENARIO: Scenario = Scenario {
     name: "snapshot",
     about:
         "Paper 002: snapshot attitude from carrier-phase range differences, ambiguity resolution",
-    variants: &[
-        Variant {
-            name: "paper",
-            about: "1 m triangle, 3 sats el 60/45/30, heading 180, 4 mm, vs CRB and the paper",
-        },
-        Variant {
-            name: "ambiguity",
-            about:
+    variants: &Variants::<Runner> {
+        list: &[
+            Variant::new(
+                "paper",
+                "1 m triangle, 3 sats el 60/45/30, heading 180, 4 mm, vs CRB and the paper",
+                paper::run,
+            ),
+            Variant::new(
+                "ambiguity",
                 "real GPS sky, 6-10 sats, 3 mm / 0.3 m, unknown integers, vs LAMBDA and rounding",
-        },
-        Variant {
-            name: "four-antenna",
-            about: "1 m tetrahedron: the paper's formula (16) vs the general solver",
-        },
-    ],
-    run,
+                ambiguity::run,
+            ),
+            Variant::new(
+                "four-antenna",
+                "1 m tetrahedron: the paper's formula (16) vs the general solver",
+                four_antenna::run,
+            ),
+        ],
+        run: |run, ctx| run(ctx),
+    },
 };
-
-fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
-    match ctx.variant.as_str() {
-        "ambiguity" => ambiguity::run(ctx),
-        "four-antenna" => four_antenna::run(ctx),
-        _ => paper::run(ctx),
-    }
-}

@@ -69,66 +69,150 @@ fn pinv_paper(
     Some((a.transpose(), d < 0.0))
 }
 
+crate::metrics! {
+    /// Metrics of `snapshot --variant paper` (each triple `[heading, roll, pitch]`).
+    pub struct Metrics {
+        /// Mean error of the core's solver.
+        #[metric(unit = "deg")] pub mean_err_deg: [f64; 3],
+        /// Standard deviation of its error.
+        #[metric(unit = "deg")] pub std_err_deg: [f64; 3],
+        /// Cramér–Rao bound for the same geometry and noise.
+        #[metric(unit = "deg")] pub crb_deg: [f64; 3],
+        /// Solutions that were reflections (`det C < 0`).
+        #[metric(unit = "epochs")] pub reflections: usize,
+        /// Monte Carlo epochs.
+        #[metric(unit = "")] pub epochs: usize,
+        /// Epochs the solver refused.
+        #[metric(unit = "epochs")] pub failures: usize,
+        /// Standard deviation over the CRB.
+        #[metric(unit = "")] pub std_over_crb: [f64; 3],
+        /// Mean of the solver's own predicted σ.
+        #[metric(unit = "deg")] pub predicted_std_deg: [f64; 3],
+        /// The paper's mean error over ours (how much better the core is).
+        #[metric(unit = "")] pub paper_over_mean_err: [f64; 3],
+        /// Mean χ² of the solutions (3 degrees of freedom).
+        #[metric(unit = "")] pub chi_square_mean: f64,
+        /// The printed algorithm with a pseudo-inverse (determinant-corrected): mean error.
+        #[metric(unit = "deg")] pub pinv_mean_err_deg: [f64; 3],
+        /// The printed algorithm (pseudo-inverse): error standard deviation.
+        #[metric(unit = "deg")] pub pinv_std_err_deg: [f64; 3],
+        /// Epochs in which its polar factor (16) was a reflection.
+        #[metric(unit = "epochs")] pub pinv_reflections: usize,
+    }
+}
+
+/// Epochs shown in the plot.
+const PLOTTED_EPOCHS: usize = 500;
+/// Floor of |mean error| in the paper/ours ratio, deg (no division by zero).
+const MEAN_ERR_FLOOR_DEG: f64 = 1e-12;
+
+/// The case: the solver, the truth, the sky and the CRB.
+struct Case {
+    b: [Vector3<f64>; 2],
+    solver: SnapshotSolver<2, f32>,
+    truth: Euler321<f64>,
+    c_rb: Matrix3<f64>,
+    sky: [Vector3<f64>; 3],
+    crb_deg: [f64; 3],
+}
+
+impl Case {
+    fn paper() -> anyhow::Result<Self> {
+        let b = triangle();
+        let solver = SnapshotSolver::<2, f32>::new(
+            Baselines::new(b.map(|v| v.cast::<f32>())).map_err(|e| anyhow::anyhow!("{e}"))?,
+            BaselineCorrelation::independent(),
+        );
+        let truth = Euler321::new(std::f64::consts::PI, 0.0, 0.0);
+        let c_rb = truth.to_dcm();
+        let sky = paper_sky();
+        let crb = crb_body(&b, &c_rb, &sky, SIGMA, &SMatrix::identity())
+            .ok_or_else(|| anyhow::anyhow!("CRB: singular Fisher information"))?;
+        Ok(Self {
+            crb_deg: euler_sigma_deg(&crb, &truth),
+            b,
+            solver,
+            truth,
+            c_rb,
+            sky,
+        })
+    }
+
+    /// Epoch `k`: the core's solver and the printed algorithm on the same ranges.
+    fn epoch(&self, seed: u64, k: usize) -> anyhow::Result<EpochResult> {
+        let identity = SMatrix::<f64, 2, 2>::identity();
+        let mut rng = epoch_rng(seed, 2, k);
+        let obs = noisy_ranges(&self.b, &self.c_rb, &self.sky, SIGMA, &identity, &mut rng)?;
+        let ranges: Vec<[f64; 2]> = obs
+            .satellites()
+            .iter()
+            .map(|s| s.range_diff.map(f64::from))
+            .collect();
+        let (pinv_err, pinv_reflection) = match pinv_paper(&self.b, &self.sky, &ranges) {
+            Some((c, reflected)) => (euler_errors_deg(&c, &self.truth), reflected),
+            None => ([f64::NAN; 3], false),
+        };
+        Ok(match self.solver.solve(&obs) {
+            Ok(sol) => {
+                let c = sol.c_rb.cast::<f64>();
+                EpochResult {
+                    err: euler_errors_deg(&c, &self.truth),
+                    sigma: euler_sigma_deg(&sol.covariance.cast::<f64>(), &self.truth),
+                    reflection: c.determinant() < 0.0,
+                    failed: false,
+                    pinv_err,
+                    pinv_reflection,
+                    chi_square: f64::from(sol.chi_square),
+                }
+            }
+            Err(_) => EpochResult {
+                err: [f64::NAN; 3],
+                sigma: [f64::NAN; 3],
+                reflection: false,
+                failed: true,
+                pinv_err,
+                pinv_reflection,
+                chi_square: f64::NAN,
+            },
+        })
+    }
+}
+
 /// Runs the variant.
 pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
-    let b = triangle();
-    let solver = SnapshotSolver::<2, f32>::new(
-        Baselines::new(b.map(|v| v.cast::<f32>())).map_err(|e| anyhow::anyhow!("{e}"))?,
-        BaselineCorrelation::independent(),
-    );
-    let truth = Euler321::new(std::f64::consts::PI, 0.0, 0.0);
-    let c_rb = truth.to_dcm();
-    let sky = paper_sky();
-    let identity = SMatrix::<f64, 2, 2>::identity();
-    let crb = crb_body(&b, &c_rb, &sky, SIGMA, &identity)
-        .ok_or_else(|| anyhow::anyhow!("CRB: singular Fisher information"))?;
-    let crb_deg = euler_sigma_deg(&crb, &truth);
-
+    let case = Case::paper()?;
     let bar = progress(EPOCHS as u64, "snapshot paper");
     let results: Vec<EpochResult> = (0..EPOCHS)
         .into_par_iter()
         .map(|k| {
-            let mut rng = epoch_rng(ctx.seed, 2, k);
-            let obs = noisy_ranges(&b, &c_rb, &sky, SIGMA, &identity, &mut rng)?;
-            let ranges: Vec<[f64; 2]> = obs
-                .satellites()
-                .iter()
-                .map(|s| s.range_diff.map(f64::from))
-                .collect();
-            let pinv = pinv_paper(&b, &sky, &ranges);
-            let (pinv_err, pinv_reflection) = match pinv {
-                Some((c, reflected)) => (euler_errors_deg(&c, &truth), reflected),
-                None => ([f64::NAN; 3], false),
-            };
+            let r = case.epoch(ctx.seed, k);
             bar.inc(1);
-            Ok(match solver.solve(&obs) {
-                Ok(sol) => {
-                    let c = sol.c_rb.cast::<f64>();
-                    let sigma = euler_sigma_deg(&sol.covariance.cast::<f64>(), &truth);
-                    EpochResult {
-                        err: euler_errors_deg(&c, &truth),
-                        sigma,
-                        reflection: c.determinant() < 0.0,
-                        failed: false,
-                        pinv_err,
-                        pinv_reflection,
-                        chi_square: f64::from(sol.chi_square),
-                    }
-                }
-                Err(_) => EpochResult {
-                    err: [f64::NAN; 3],
-                    sigma: [f64::NAN; 3],
-                    reflection: false,
-                    failed: true,
-                    pinv_err,
-                    pinv_reflection,
-                    chi_square: f64::NAN,
-                },
-            })
+            r
         })
         .collect::<anyhow::Result<_>>()?;
     bar.finish_and_clear();
+    let errs: Vec<[f64; 3]> = results
+        .iter()
+        .filter(|r| !r.failed)
+        .map(|r| r.err)
+        .collect();
+    let m = metrics(&results, case.crb_deg);
+    let mut outcome = Outcome::new(&m)?;
+    outcome.paper = json!({
+        "mean_err_deg": PAPER_MEAN_ERR_DEG,
+        "test1_err_deg": [0.708, 0.877, 0.552],
+        "test2_err_deg": [1.608, 1.570, 0.467],
+        "spec_crb_deg": [0.19, 0.24, 0.19],
+        "note": "[heading, roll, pitch]; the printed means do not follow from the two tests (spec erratum 5)"
+    });
+    outcome.summary = summary(&m);
+    if let Some(dir) = &ctx.out_dir {
+        outcome.files = write_files(dir, &errs, case.crb_deg)?;
+    }
+    Ok(outcome)
+}
 
+fn metrics(results: &[EpochResult], crb_deg: [f64; 3]) -> Metrics {
     let ok: Vec<&EpochResult> = results.iter().filter(|r| !r.failed).collect();
     let errs: Vec<[f64; 3]> = ok.iter().map(|r| r.err).collect();
     let sigmas: Vec<[f64; 3]> = ok.iter().map(|r| r.sigma).collect();
@@ -141,101 +225,80 @@ pub fn run(ctx: &RunContext) -> anyhow::Result<Outcome> {
     let std = |v: &[[f64; 3]]| [0, 1, 2].map(|a| stats::std_dev(&column(v, a)));
     let mean_err = mean(&errs);
     let std_err = std(&errs);
-    let predicted = mean(&sigmas);
-    let reflections = results.iter().filter(|r| r.reflection).count();
-    let failures = results.len() - ok.len();
-    let std_over_crb = [0, 1, 2].map(|a| std_err[a] / crb_deg[a]);
-    let beats = [0, 1, 2].map(|a| PAPER_MEAN_ERR_DEG[a] / mean_err[a].abs().max(1e-12));
-    let pinv_mean = mean(&pinv);
-    let pinv_reflections = results.iter().filter(|r| r.pinv_reflection).count();
     let chi2: Vec<f64> = ok.iter().map(|r| r.chi_square).collect();
-
-    let mut outcome = Outcome::default();
-    outcome
-        .metric("mean_err_deg", json!(mean_err))
-        .metric("std_err_deg", json!(std_err))
-        .metric("crb_deg", json!(crb_deg))
-        .metric("reflections", reflections)
-        .metric("epochs", EPOCHS)
-        .metric("failures", failures)
-        .metric("std_over_crb", json!(std_over_crb))
-        .metric("predicted_std_deg", json!(predicted))
-        .metric("paper_over_mean_err", json!(beats))
-        .metric("chi_square_mean", stats::mean(&chi2))
-        .metric("pinv_mean_err_deg", json!(pinv_mean))
-        .metric("pinv_std_err_deg", json!(std(&pinv)))
-        .metric("pinv_reflections", pinv_reflections);
-    outcome.paper = json!({
-        "mean_err_deg": PAPER_MEAN_ERR_DEG,
-        "test1_err_deg": [0.708, 0.877, 0.552],
-        "test2_err_deg": [1.608, 1.570, 0.467],
-        "spec_crb_deg": [0.19, 0.24, 0.19],
-        "note": "[heading, roll, pitch]; the printed means do not follow from the two tests (spec erratum 5)"
-    });
-    let f = |v: [f64; 3]| format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2]);
-    outcome.summary = vec![
-        format!("{EPOCHS} epochs, 1 m triangle, 3 satellites (el 60/45/30), heading 180°, {} mm per single difference; [heading / roll / pitch] in degrees", SIGMA * 1e3),
-        format!("mean error   {}   (paper: {})", f(mean_err), f(PAPER_MEAN_ERR_DEG)),
-        format!("std error    {}   CRB {}   ratio {}", f(std_err), f(crb_deg), f(std_over_crb)),
-        format!("predicted σ  {}   mean χ² {:.2} (3 dof)", f(predicted), stats::mean(&chi2)),
-        format!("reflections {reflections}, failures {failures}; paper / |our mean| ≥ {:.0}x", beats.iter().fold(f64::INFINITY, |a, &b| a.min(b))),
-        format!("printed algorithm with a pseudo-inverse (det-corrected): mean error {}; its polar factor (16) is a reflection in {} epochs", f(pinv_mean), pinv_reflections),
-    ];
-
-    if let Some(dir) = &ctx.out_dir {
-        let csv = dir.join("snapshot_paper_errors.csv");
-        write_csv(
-            &csv,
-            &["epoch", "heading_err_deg", "roll_err_deg", "pitch_err_deg"],
-            errs.iter()
-                .enumerate()
-                .map(|(k, e)| [k as f64, e[0], e[1], e[2]]),
-        )?;
-        let shown = errs.len().min(500);
-        let panels: Vec<Panel> = ["heading", "roll", "pitch"]
-            .iter()
-            .enumerate()
-            .map(|(a, name)| Panel {
-                y_label: format!("{name} error (deg)"),
-                series: vec![
-                    Series::line(
-                        format!("{name} error"),
-                        errs[..shown]
-                            .iter()
-                            .enumerate()
-                            .map(|(k, e)| (k as f64, e[a]))
-                            .collect(),
-                        0,
-                    ),
-                    Series::bound(
-                        "+3 CRB",
-                        vec![(0.0, 3.0 * crb_deg[a]), (shown as f64, 3.0 * crb_deg[a])],
-                        1,
-                    ),
-                    Series::bound(
-                        "-3 CRB",
-                        vec![(0.0, -3.0 * crb_deg[a]), (shown as f64, -3.0 * crb_deg[a])],
-                        1,
-                    ),
-                    Series::bound(
-                        "paper mean error",
-                        vec![
-                            (0.0, PAPER_MEAN_ERR_DEG[a]),
-                            (shown as f64, PAPER_MEAN_ERR_DEG[a]),
-                        ],
-                        2,
-                    ),
-                ],
-            })
-            .collect();
-        let png = dir.join("snapshot_paper_errors.png");
-        plot_panels(
-            &png,
-            "snapshot paper: single-epoch errors, ±3 CRB, paper's mean error",
-            "epoch",
-            &panels,
-        )?;
-        outcome.files = vec![csv, png];
+    Metrics {
+        mean_err_deg: mean_err,
+        std_err_deg: std_err,
+        crb_deg,
+        reflections: results.iter().filter(|r| r.reflection).count(),
+        epochs: EPOCHS,
+        failures: results.len() - ok.len(),
+        std_over_crb: [0, 1, 2].map(|a| std_err[a] / crb_deg[a]),
+        predicted_std_deg: mean(&sigmas),
+        paper_over_mean_err: [0, 1, 2]
+            .map(|a| PAPER_MEAN_ERR_DEG[a] / mean_err[a].abs().max(MEAN_ERR_FLOOR_DEG)),
+        chi_square_mean: stats::mean(&chi2),
+        pinv_mean_err_deg: mean(&pinv),
+        pinv_std_err_deg: std(&pinv),
+        pinv_reflections: results.iter().filter(|r| r.pinv_reflection).count(),
     }
-    Ok(outcome)
+}
+
+fn summary(m: &Metrics) -> Vec<String> {
+    let f = |v: [f64; 3]| format!("{:.4} / {:.4} / {:.4}", v[0], v[1], v[2]);
+    vec![
+        format!("{EPOCHS} epochs, 1 m triangle, 3 satellites (el 60/45/30), heading 180°, {} mm per single difference; [heading / roll / pitch] in degrees", SIGMA * 1e3),
+        format!("mean error   {}   (paper: {})", f(m.mean_err_deg), f(PAPER_MEAN_ERR_DEG)),
+        format!("std error    {}   CRB {}   ratio {}", f(m.std_err_deg), f(m.crb_deg), f(m.std_over_crb)),
+        format!("predicted σ  {}   mean χ² {:.2} (3 dof)", f(m.predicted_std_deg), m.chi_square_mean),
+        format!("reflections {}, failures {}; paper / |our mean| ≥ {:.0}x", m.reflections, m.failures, m.paper_over_mean_err.iter().fold(f64::INFINITY, |a, &b| a.min(b))),
+        format!("printed algorithm with a pseudo-inverse (det-corrected): mean error {}; its polar factor (16) is a reflection in {} epochs", f(m.pinv_mean_err_deg), m.pinv_reflections),
+    ]
+}
+
+/// The errors as CSV, and the first epochs against ±3 CRB and the paper's mean error.
+fn write_files(
+    dir: &std::path::Path,
+    errs: &[[f64; 3]],
+    crb_deg: [f64; 3],
+) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    let csv = dir.join("snapshot_paper_errors.csv");
+    write_csv(
+        &csv,
+        &["epoch", "heading_err_deg", "roll_err_deg", "pitch_err_deg"],
+        errs.iter()
+            .enumerate()
+            .map(|(k, e)| [k as f64, e[0], e[1], e[2]]),
+    )?;
+    let shown = errs.len().min(PLOTTED_EPOCHS);
+    let level = |y: f64| vec![(0.0, y), (shown as f64, y)];
+    let panels: Vec<Panel> = ["heading", "roll", "pitch"]
+        .iter()
+        .enumerate()
+        .map(|(a, name)| Panel {
+            y_label: format!("{name} error (deg)"),
+            series: vec![
+                Series::line(
+                    format!("{name} error"),
+                    errs[..shown]
+                        .iter()
+                        .enumerate()
+                        .map(|(k, e)| (k as f64, e[a]))
+                        .collect(),
+                    0,
+                ),
+                Series::bound("+3 CRB", level(3.0 * crb_deg[a]), 1),
+                Series::bound("-3 CRB", level(-3.0 * crb_deg[a]), 1),
+                Series::bound("paper mean error", level(PAPER_MEAN_ERR_DEG[a]), 2),
+            ],
+        })
+        .collect();
+    let png = dir.join("snapshot_paper_errors.png");
+    plot_panels(
+        &png,
+        "snapshot paper: single-epoch errors, ±3 CRB, paper's mean error",
+        "epoch",
+        &panels,
+    )?;
+    Ok(vec![csv, png])
 }

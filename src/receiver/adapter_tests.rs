@@ -2,10 +2,10 @@
 //! samples are tested in the crate's `tests/one_stage_samples.rs`).
 
 use super::adapter::*;
+use crate::attitude::one_stage::OneStageError;
 use crate::signal::correlator::{EpochCorrelations, Iq, Taps};
 use crate::signal::Prn;
 use crate::tracking::{ChannelState, LockFlags, TrackingEpoch};
-use crate::OneStageError;
 
 fn tap(i: i32, q: i32) -> Iq {
     Iq { i, q }

@@ -5,7 +5,7 @@
 //!
 //! * **Antennas.** Correlator input `k` of a [`TrackingEpoch<3>`] is the `k`-th antenna of the
 //!   [`SampleBlock`](crate::signal::SampleBlock); [`AntennaMapping::inputs`] says which input
-//!   is A, B and C of the [`AntennaArray`](super::AntennaArray) (default: 0, 1, 2, with A the
+//!   is A, B and C of the [`AntennaArray`](crate::attitude::array::AntennaArray) (default: 0, 1, 2, with A the
 //!   reference antenna whose loops drive the replica).
 //! * **Sign of Q.** The crate's correlator computes `Σ x_k e^{−jφ_k}` with the replica phase
 //!   `φ_k`; a front end without spectral inversion delivers `x ∝ e^{+jΦ_P}` with the carrier
@@ -36,16 +36,16 @@
 //! # Front-end re-lock
 //!
 //! A front end whose synthesizer re-locks changes the antennas' line biases (and possibly their
-//! gains): call [`OneStageFilter::reopen_line_biases`](super::OneStageFilter::reopen_line_biases)
+//! gains): call [`OneStageFilter::reopen_line_biases`](crate::attitude::one_stage::OneStageFilter::reopen_line_biases)
 //! and [`ObservationAdapter::reset_noise`].
 
+use crate::attitude::one_stage::OneStageError;
 use crate::signal::correlator::Iq;
 use crate::signal::EpochCorrelations;
 use crate::tracking::{ChannelState, TrackingEpoch};
-use crate::OneStageError;
 
-use super::discriminator::PromptIq;
-use super::input::SatelliteObservation;
+use crate::attitude::one_stage::PromptIq;
+use crate::attitude::one_stage::SatelliteObservation;
 
 /// Sign of the chain's quadrature component relative to the filter's `Z ∝ e^{+jφ}`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

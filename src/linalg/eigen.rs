@@ -1,7 +1,7 @@
 //! Bounded cyclic Jacobi eigen-decomposition of small symmetric matrices.
 //!
 //! nalgebra's `SymmetricEigen::new` iterates without a bound; this one stops after
-//! [`JACOBI_MAX_SWEEPS`] sweeps. Jacobi rotations converge quadratically and keep the
+//! [`EIGEN_MAX_SWEEPS`] sweeps. Jacobi rotations converge quadratically and keep the
 //! eigenvectors orthonormal to rounding, with high relative accuracy; 3×3 and 4×4 matrices
 //! converge in 3–6 sweeps in `f32` and `f64`.
 
@@ -10,7 +10,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::{real, Real};
 
 /// Upper bound on the sweeps of [`symmetric_eigen`] (each sweep is `D(D−1)/2` rotations).
-pub const JACOBI_MAX_SWEEPS: usize = 12;
+pub const EIGEN_MAX_SWEEPS: usize = 12;
 
 /// Eigenvalues and orthonormal eigenvectors (as columns) of the symmetric part of `a`, sorted
 /// by decreasing eigenvalue.
@@ -29,7 +29,7 @@ pub fn symmetric_eigen<T: Real, const D: usize>(
     let scale = m.norm();
     let tolerance = T::default_epsilon() * real(8.0) * scale;
     let mut converged = false;
-    for _ in 0..JACOBI_MAX_SWEEPS {
+    for _ in 0..EIGEN_MAX_SWEEPS {
         if off_diagonal_norm(&m) <= tolerance {
             converged = true;
             break;

@@ -3,27 +3,28 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::{CalibrationError, Real};
+use super::LinalgError;
+use crate::Real;
 
 /// Upper bound on the sweeps of the one-sided Jacobi iteration. One sweep rotates every pair of
 /// columns once (`X (X − 1) / 2` rotations of `O(X)` work); the iteration converges
 /// quadratically and needs 6–10 sweeps for `X = 15` in practice.
-pub const JACOBI_MAX_SWEEPS: u32 = 30;
+pub const SVD_MAX_SWEEPS: u32 = 30;
 
 /// The singular values of `a` in descending order.
 ///
 /// One-sided Jacobi: plane rotations of column pairs `(p, q)` until every pair is orthogonal to
 /// `X ε` relative (`|a_pᵀ a_q| ≤ X ε ‖a_p‖ ‖a_q‖`); the singular values are then the column
-/// norms. Columns shorter than `ε ‖A‖_F` count as zero. At most [`JACOBI_MAX_SWEEPS`] sweeps.
+/// norms. Columns shorter than `ε ‖A‖_F` count as zero. At most [`SVD_MAX_SWEEPS`] sweeps.
 ///
 /// # Errors
-/// [`CalibrationError::NonFiniteInput`] for a non-finite element;
-/// [`CalibrationError::NotConverged`] when the sweep bound is reached.
+/// [`LinalgError::NonFinite`] for a non-finite element;
+/// [`LinalgError::NotConverged`] when the sweep bound is reached.
 pub fn singular_values<T: Real, const X: usize>(
     a: &SMatrix<T, X, X>,
-) -> Result<SVector<T, X>, CalibrationError> {
+) -> Result<SVector<T, X>, LinalgError> {
     if !a.iter().all(|v| v.is_finite()) {
-        return Err(CalibrationError::NonFiniteInput);
+        return Err(LinalgError::NonFinite);
     }
     let mut a = *a;
     let tol = T::default_epsilon() * nalgebra::convert::<f64, T>(X as f64);
@@ -34,7 +35,7 @@ pub fn singular_values<T: Real, const X: usize>(
         let e = T::default_epsilon() * a.norm();
         e * e
     };
-    for _sweep in 0..JACOBI_MAX_SWEEPS {
+    for _sweep in 0..SVD_MAX_SWEEPS {
         let mut rotated = false;
         for p in 0..X {
             for q in (p + 1)..X {
@@ -74,7 +75,7 @@ pub fn singular_values<T: Real, const X: usize>(
             return Ok(s);
         }
     }
-    Err(CalibrationError::NotConverged)
+    Err(LinalgError::NotConverged)
 }
 
 /// Insertion sort, descending (`X²/2` comparisons at most).

@@ -1,52 +1,10 @@
-//! Small bounded matrix helpers of the filter: element access without panics, angle wrapping,
-//! a positive semi-definite factorization, a regularized solve and marginal information.
+//! A positive semi-definite factorization, a regularized solve and marginal information: the
+//! information-form helpers of the one-stage filter. Every loop runs over the matrices' own
+//! dimensions, so every index is in range.
 
 use nalgebra::{Cholesky, SMatrix, SVector};
 
 use crate::{real, Real};
-
-/// Element `(i, j)`, zero when out of range.
-pub(crate) fn el<T: Real, const R: usize, const C: usize>(
-    m: &SMatrix<T, R, C>,
-    i: usize,
-    j: usize,
-) -> T {
-    m.get((i, j)).copied().unwrap_or_else(T::zero)
-}
-
-/// Sets element `(i, j)`; ignored when out of range.
-pub(crate) fn set<T: Real, const R: usize, const C: usize>(
-    m: &mut SMatrix<T, R, C>,
-    i: usize,
-    j: usize,
-    v: T,
-) {
-    if let Some(e) = m.get_mut((i, j)) {
-        *e = v;
-    }
-}
-
-/// Adds `v` to element `i` of a vector; ignored when out of range.
-pub(crate) fn add<T: Real, const N: usize>(x: &mut SVector<T, N>, i: usize, v: T) {
-    if let Some(e) = x.get_mut(i) {
-        *e += v;
-    }
-}
-
-/// `angle` wrapped to `(−π, π]`.
-pub(crate) fn wrap<T: Real>(angle: T) -> T {
-    let pi = T::pi();
-    if angle > -pi && angle <= pi {
-        return angle;
-    }
-    let two_pi = T::two_pi();
-    let w = angle - two_pi * ((angle + pi) / two_pi).floor();
-    if w <= -pi {
-        w + two_pi
-    } else {
-        w
-    }
-}
 
 /// `L̃` with `W = L̃ L̃ᵀ` for a symmetric positive semi-definite `W` (`LDLᵀ` without pivoting,
 /// pivots below `1e-6 · max diag` taken as zero, so a singular `W` gives zero columns):
@@ -54,28 +12,19 @@ pub(crate) fn wrap<T: Real>(angle: T) -> T {
 pub(crate) fn psd_factor<T: Real, const N: usize>(w: &SMatrix<T, N, N>) -> SMatrix<T, N, N> {
     let max_diag = w.diagonal().iter().fold(T::zero(), |m, &v| m.max(v));
     let tol = max_diag * real(1e-6);
+    // unit lower triangle L and pivots D, column by column (all indices below N)
     let mut l = SMatrix::<T, N, N>::zeros();
     let mut d = SVector::<T, N>::zeros();
-    let dk = |d: &SVector<T, N>, k: usize| d.get(k).copied().unwrap_or_else(T::zero);
     for j in 0..N {
-        let mut dj = el(w, j, j);
-        for k in 0..j {
-            let ljk = el(&l, j, k);
-            dj -= ljk * ljk * dk(&d, k);
-        }
+        let dj = w[(j, j)] - (0..j).fold(T::zero(), |s, k| s + l[(j, k)] * l[(j, k)] * d[k]);
         if !(dj > tol) {
             continue;
         }
-        if let Some(v) = d.get_mut(j) {
-            *v = dj;
-        }
-        set(&mut l, j, j, T::one());
+        d[j] = dj;
+        l[(j, j)] = T::one();
         for i in (j + 1)..N {
-            let mut s = el(w, i, j);
-            for k in 0..j {
-                s -= el(&l, i, k) * el(&l, j, k) * dk(&d, k);
-            }
-            set(&mut l, i, j, s / dj);
+            let s = (0..j).fold(w[(i, j)], |s, k| s - l[(i, k)] * l[(j, k)] * d[k]);
+            l[(i, j)] = s / dj;
         }
     }
     l * SMatrix::from_diagonal(&d.map(|v| v.sqrt()))
@@ -87,10 +36,10 @@ fn regularized<T: Real, const N: usize>(j: &SMatrix<T, N, N>) -> SMatrix<T, N, N
     let max_diag = j.diagonal().iter().fold(T::zero(), |m, &v| m.max(v));
     let mut m = *j + SMatrix::<T, N, N>::identity() * (max_diag * real(1e-4));
     for k in 0..N {
-        if !(el(j, k, k) > T::zero()) {
+        if !(j[(k, k)] > T::zero()) {
             m.row_mut(k).fill(T::zero());
             m.column_mut(k).fill(T::zero());
-            set(&mut m, k, k, T::one());
+            m[(k, k)] = T::one();
         }
     }
     m
@@ -112,8 +61,8 @@ pub(crate) fn marginal_information<T: Real, const N: usize>(j: &SMatrix<T, N, N>
     };
     let inv = chol.inverse();
     SVector::from_fn(|k, _| {
-        let d = el(&inv, k, k);
-        if el(j, k, k) > T::zero() && d > T::zero() {
+        let d = inv[(k, k)];
+        if j[(k, k)] > T::zero() && d > T::zero() {
             d.recip()
         } else {
             T::zero()
@@ -134,20 +83,6 @@ mod tests {
         for w in [singular, definite, Matrix4::zeros()] {
             let l = psd_factor(&w);
             assert!((l * l.transpose() - w).norm() < 1e-9 * (1.0 + w.norm()));
-        }
-    }
-
-    #[test]
-    fn wrap_maps_onto_minus_pi_to_pi() {
-        use core::f64::consts::PI;
-        for (a, w) in [
-            (0.5, 0.5),
-            (PI, PI),
-            (-PI, PI),
-            (3.0 * PI, PI),
-            (7.0, 7.0 - 2.0 * PI),
-        ] {
-            assert!((wrap(a) - w).abs() < 1e-12, "{a}");
         }
     }
 

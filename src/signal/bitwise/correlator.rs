@@ -1,0 +1,687 @@
+//! The bit-parallel correlator of one satellite over `A` antennas: one carrier NCO and one
+//! code NCO (the reference antenna's, steered by its loops) shared by every antenna, E/P/L and
+//! noise taps on the reference antenna, the prompt (or all four taps) on the others.
+//!
+//! Same interface and output as [`Correlator`](crate::signal::Correlator): the integration
+//! ends where the prompt code phase completes a code period, whatever the block boundaries;
+//! [`BitCorrelator::run`] stops there and resumes in the next call; the output is an
+//! [`EpochCorrelations`] with the same stamps (first sample, code and carrier phase at it,
+//! sample count, completeness).
+
+use super::block::BitBlock;
+use super::carrier::{self, CarrierLevels, CarrierStep, CarrierWords};
+use super::code::{self, CodeCursor, CodeTable, EXT_BYTES, MIN_TABLE_SAMPLE_RATE_HZ};
+use super::kernel::{self, ChunkPlanes, StreamWords, CHUNK_WORDS, MAX_STREAMS};
+use super::planes::{PlaneFormat, WORD_SAMPLES};
+use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, QUIET_OFFSET_CHIPS};
+use crate::signal::correlator::{
+    CorrelatorConfig, EpochCorrelations, Iq, SlaveTaps, Taps, MAX_EARLY_LATE_OFFSET,
+    MAX_SAMPLES_PER_EPOCH,
+};
+use crate::signal::nco::{CarrierNco, CodeNco, CODE_WRAP};
+use crate::signal::SignalError;
+
+/// Largest noise-tap delay, samples (the quiet offsets of all PRNs stay below it up to
+/// 60 Msps).
+pub const MAX_NOISE_DELAY_SAMPLES: usize = 1024;
+
+/// Prompt words kept before a chunk for the delayed taps.
+const BACK_WORDS: usize = MAX_NOISE_DELAY_SAMPLES / WORD_SAMPLES;
+/// Prompt words kept after a chunk for the early tap.
+const FORWARD_WORDS: usize = MAX_EARLY_LATE_OFFSET.div_ceil(WORD_SAMPLES);
+/// Prompt words generated per chunk at most.
+const PROMPT_WORDS: usize = CHUNK_WORDS + BACK_WORDS + FORWARD_WORDS + 1;
+
+/// Index of the early tap in the replica words and accumulators.
+const EARLY: usize = 0;
+/// Index of the prompt tap.
+const PROMPT: usize = 1;
+/// Index of the late tap.
+const LATE: usize = 2;
+/// Index of the noise tap.
+const NOISE: usize = 3;
+
+/// Error returned by [`BitCorrelator`] and [`CodeTable::new`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum BitCorrelatorError {
+    /// The correlator configuration is refused by its validation (see
+    /// [`CorrelatorConfig::validate`]).
+    #[error("correlator configuration refused")]
+    Config(#[source] SignalError),
+    /// A value is out of the bit-parallel correlator's range: a sample rate below
+    /// [`MIN_TABLE_SAMPLE_RATE_HZ`] (two samples per chip), a noise delay above
+    /// [`MAX_NOISE_DELAY_SAMPLES`], a carrier frequency beyond ±`f_s`/2, a code rate more than
+    /// 1 % off nominal, or no antennas.
+    #[error("value out of the bit-parallel correlator's range")]
+    InvalidConfig,
+    /// A frequency, rate or phase was NaN or infinite.
+    #[error("non-finite NCO input")]
+    NonFinite,
+    /// The cursor lies beyond the end of the block.
+    #[error("cursor beyond the end of the block")]
+    CursorOutOfRange,
+    /// The block's planes are not of the correlator's format.
+    #[error("block planes of another format")]
+    FormatMismatch,
+    /// The block's code table is of another sample rate.
+    #[error("code table of another sample rate")]
+    TableMismatch,
+}
+
+impl crate::error::Error for BitCorrelatorError {
+    fn kind(&self) -> crate::error::ErrorKind {
+        match self {
+            Self::Config(e) => crate::error::Error::kind(e),
+            Self::NonFinite => crate::error::ErrorKind::NonFinite,
+            _ => crate::error::ErrorKind::InvalidInput,
+        }
+    }
+}
+
+/// Configuration of a bit-parallel correlator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BitCorrelatorConfig {
+    /// Front end and tap placement, as for the `i8` correlator.
+    pub correlator: CorrelatorConfig,
+    /// The planes the blocks will carry.
+    pub format: PlaneFormat,
+    /// Quantization of the carrier replica.
+    pub carrier: CarrierLevels,
+}
+
+impl BitCorrelatorConfig {
+    /// The noise tap's delay, samples: the PRN's quiet offset plus half a chip,
+    /// `round((q + ½)·f_s/f_chip)` (a delay in `[q, q + 1]` chips: the autocorrelation is
+    /// `−1/1023` there).
+    pub fn noise_delay_samples(&self, prn: Prn) -> usize {
+        let quiet = QUIET_OFFSET_CHIPS.get(prn.index()).copied().unwrap_or(6);
+        let d = libm::round(
+            (f64::from(quiet) + 0.5) * self.correlator.sample_rate_hz / CA_CHIP_RATE_HZ,
+        );
+        if d.is_finite() && d >= 1.0 {
+            d as usize
+        } else {
+            1
+        }
+    }
+
+    /// Checks the configuration for `prn`.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::Config`] from [`CorrelatorConfig::validate`];
+    /// [`BitCorrelatorError::InvalidConfig`] for a sample rate below two samples per chip or a
+    /// noise delay beyond [`MAX_NOISE_DELAY_SAMPLES`].
+    pub fn validate(&self, prn: Prn) -> Result<(), BitCorrelatorError> {
+        self.correlator
+            .validate()
+            .map_err(BitCorrelatorError::Config)?;
+        if !(self.correlator.sample_rate_hz >= MIN_TABLE_SAMPLE_RATE_HZ)
+            || self.noise_delay_samples(prn) > MAX_NOISE_DELAY_SAMPLES
+        {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        Ok(())
+    }
+}
+
+/// The bit-parallel correlator of one satellite over `A` antennas.
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BitCorrelator<const A: usize> {
+    prn: Prn,
+    sample_rate_hz: f64,
+    format: PlaneFormat,
+    levels: CarrierLevels,
+    carrier: CarrierNco,
+    /// Total carrier phase, 2⁻³² cycle (low 32 bits = `carrier.phase`).
+    carrier_total: i64,
+    code: CodeNco,
+    offset: usize,
+    noise_delay: usize,
+    slave_taps: SlaveTaps,
+    table_step: u64,
+    ext: [u8; EXT_BYTES],
+    /// Population counts per antenna, tap (E, P, L, N) and stream.
+    acc: [[[u32; MAX_STREAMS]; 4]; A],
+    /// Samples of the `c` streams' and of the `s` streams' support.
+    support: [u32; 2],
+    /// Scratch of the chunk loop (replica and stream words), reused chunk by chunk.
+    work: Workspace,
+    samples: u32,
+    epoch_first_sample: u64,
+    epoch_code_phase: u64,
+    epoch_carrier_phase: i64,
+    partial: bool,
+}
+
+impl<const A: usize> BitCorrelator<A> {
+    /// A correlator for `prn` with the NCOs at zero phase, the configured IF and the nominal
+    /// code rate.
+    ///
+    /// # Errors
+    /// As [`BitCorrelatorConfig::validate`]; [`BitCorrelatorError::InvalidConfig`] for
+    /// `A = 0`.
+    pub fn new(prn: Prn, config: &BitCorrelatorConfig) -> Result<Self, BitCorrelatorError> {
+        config.validate(prn)?;
+        if A == 0 {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        let c = &config.correlator;
+        let step = CodeNco::step_for(CA_CHIP_RATE_HZ, c.sample_rate_hz);
+        code::step_supported(step)?;
+        Ok(Self {
+            prn,
+            sample_rate_hz: c.sample_rate_hz,
+            format: config.format,
+            levels: config.carrier,
+            carrier: CarrierNco {
+                phase: 0,
+                step: CarrierNco::step_for(c.intermediate_frequency_hz, c.sample_rate_hz),
+            },
+            carrier_total: 0,
+            code: CodeNco { phase: 0, step },
+            offset: c.early_late_offset_samples().min(MAX_EARLY_LATE_OFFSET),
+            noise_delay: config.noise_delay_samples(prn),
+            slave_taps: c.slave_taps,
+            table_step: step,
+            ext: code::extended_code(prn),
+            acc: [[[0; MAX_STREAMS]; 4]; A],
+            support: [0; 2],
+            work: Workspace::new(),
+            samples: 0,
+            epoch_first_sample: 0,
+            epoch_code_phase: 0,
+            epoch_carrier_phase: 0,
+            partial: true,
+        })
+    }
+
+    /// The satellite.
+    pub fn prn(&self) -> Prn {
+        self.prn
+    }
+
+    /// Sample rate, Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        self.sample_rate_hz
+    }
+
+    /// The planes this correlator reads.
+    pub fn format(&self) -> PlaneFormat {
+        self.format
+    }
+
+    /// The carrier replica's levels.
+    pub fn carrier_levels(&self) -> CarrierLevels {
+        self.levels
+    }
+
+    /// The carrier NCO.
+    pub fn carrier(&self) -> CarrierNco {
+        self.carrier
+    }
+
+    /// The code NCO.
+    pub fn code(&self) -> CodeNco {
+        self.code
+    }
+
+    /// The early/late offset, samples (early = prompt advanced by it, late = delayed).
+    pub fn early_late_offset_samples(&self) -> usize {
+        self.offset
+    }
+
+    /// The noise tap's delay behind the prompt, samples.
+    pub fn noise_delay_samples(&self) -> usize {
+        self.noise_delay
+    }
+
+    /// The code step of the table the blocks must carry (the nominal step), 2⁻³² chip.
+    pub fn table_step(&self) -> u64 {
+        self.table_step
+    }
+
+    /// Total carrier phase of the replica now, 2⁻³² cycle.
+    pub fn carrier_phase_total(&self) -> i64 {
+        self.carrier_total
+    }
+
+    /// Sets the carrier NCO frequency (IF + Doppler), Hz.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`]; [`BitCorrelatorError::InvalidConfig`] for
+    /// `|f| ≥ f_s/2`.
+    pub fn set_carrier_frequency(&mut self, frequency_hz: f64) -> Result<(), BitCorrelatorError> {
+        if !frequency_hz.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        if !(frequency_hz.abs() < 0.5 * self.sample_rate_hz) {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        self.carrier.step = CarrierNco::step_for(frequency_hz, self.sample_rate_hz);
+        Ok(())
+    }
+
+    /// Sets the code rate, chips/s.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`]; [`BitCorrelatorError::InvalidConfig`] for a rate
+    /// more than 1 % off nominal.
+    pub fn set_code_rate(&mut self, chips_per_second: f64) -> Result<(), BitCorrelatorError> {
+        if !chips_per_second.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        if !((chips_per_second / CA_CHIP_RATE_HZ - 1.0).abs() <= 0.01) {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        let step = CodeNco::step_for(chips_per_second, self.sample_rate_hz);
+        code::step_supported(step)?;
+        if CODE_WRAP.div_ceil(step) + 1 > MAX_SAMPLES_PER_EPOCH {
+            return Err(BitCorrelatorError::InvalidConfig);
+        }
+        self.code.step = step;
+        Ok(())
+    }
+
+    /// Sets the prompt code phase, chips (modulo 1023), discarding the integration in
+    /// progress (the next output is marked partial).
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`].
+    pub fn set_code_phase(&mut self, chips: f64) -> Result<(), BitCorrelatorError> {
+        if !chips.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        self.code.phase = CodeNco::phase_for(chips);
+        self.reset_integration();
+        Ok(())
+    }
+
+    /// Sets the carrier NCO phase, cycles, keeping the whole-cycle count.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::NonFinite`].
+    pub fn set_carrier_phase(&mut self, cycles: f64) -> Result<(), BitCorrelatorError> {
+        if !cycles.is_finite() {
+            return Err(BitCorrelatorError::NonFinite);
+        }
+        let frac = cycles - libm::floor(cycles);
+        let word = (libm::round(frac * 4_294_967_296.0) as u64 & 0xffff_ffff) as u32;
+        self.carrier_total = (self.carrier_total & !0xffff_ffff) | i64::from(word);
+        self.carrier.phase = word;
+        Ok(())
+    }
+
+    /// Discards the integration in progress; the next output is marked partial.
+    pub fn reset_integration(&mut self) {
+        self.acc = [[[0; MAX_STREAMS]; 4]; A];
+        self.support = [0; 2];
+        self.samples = 0;
+        self.partial = true;
+    }
+
+    /// Correlates `block` from sample `*cursor` until the end of the block or the end of the
+    /// current code period, whichever comes first, and advances `*cursor`. Returns the
+    /// correlations when a code period completed, `None` when the block ended first (the
+    /// integration continues in the next call, which must pass the next block of the same
+    /// sample stream).
+    ///
+    /// Bounded: at most one code period of samples per call.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::CursorOutOfRange`] when `*cursor > block.len()`,
+    /// [`BitCorrelatorError::FormatMismatch`] or [`BitCorrelatorError::TableMismatch`] for a
+    /// block that does not fit this correlator; the correlator is then unchanged.
+    pub fn run(
+        &mut self,
+        block: &BitBlock<'_, A>,
+        cursor: &mut usize,
+    ) -> Result<Option<EpochCorrelations<A>>, BitCorrelatorError> {
+        let start = *cursor;
+        if start > block.len() {
+            return Err(BitCorrelatorError::CursorOutOfRange);
+        }
+        if block.format() != self.format {
+            return Err(BitCorrelatorError::FormatMismatch);
+        }
+        if block.table().step() != self.table_step {
+            return Err(BitCorrelatorError::TableMismatch);
+        }
+        let available = (block.len() - start) as u64;
+        let to_wrap = self.code.samples_to_wrap();
+        let n = available.min(to_wrap) as usize;
+        if n == 0 {
+            return Ok(None);
+        }
+        if self.samples == 0 {
+            self.epoch_first_sample = block.first_sample().wrapping_add(start as u64);
+            self.epoch_code_phase = self.code.phase;
+            self.epoch_carrier_phase = self.carrier_total;
+        }
+        self.correlate_span(block, start, n);
+        *cursor = start + n;
+        if (n as u64) < to_wrap {
+            return Ok(None);
+        }
+        self.code.phase = self.code.phase.wrapping_sub(CODE_WRAP);
+        let out = EpochCorrelations {
+            taps: self.taps(),
+            samples: self.samples,
+            first_sample: self.epoch_first_sample,
+            code_phase_at_first: self.epoch_code_phase,
+            carrier_phase_at_first: self.epoch_carrier_phase,
+            complete: !self.partial,
+        };
+        self.acc = [[[0; MAX_STREAMS]; 4]; A];
+        self.support = [0; 2];
+        self.samples = 0;
+        self.partial = false;
+        Ok(Some(out))
+    }
+
+    /// The taps of the integration so far.
+    fn taps(&self) -> [Taps; A] {
+        let (cx, tb) = (self.format.complex, self.format.two_bit());
+        let l3 = self.levels == CarrierLevels::Three;
+        let [nc, ns] = self.support;
+        let mut out = [Taps::default(); A];
+        for (a, (t, acc)) in out.iter_mut().zip(self.acc.iter()).enumerate() {
+            let tap = |k: usize| {
+                let p = acc.get(k).copied().unwrap_or_default();
+                let (i, q) = kernel::combine(cx, tb, l3, &p, nc, ns);
+                Iq { i, q }
+            };
+            t.prompt = tap(PROMPT);
+            if a == 0 || self.slave_taps == SlaveTaps::All {
+                t.early = tap(EARLY);
+                t.late = tap(LATE);
+                t.noise = tap(NOISE);
+            }
+        }
+        out
+    }
+
+    /// Correlates `n` samples from `start` (all within one code period), chunk by chunk.
+    fn correlate_span(&mut self, block: &BitBlock<'_, A>, start: usize, n: usize) {
+        let end = start + n;
+        let mut s = start;
+        // Bounded: every pass but the last covers a whole chunk (at most 70 passes for the
+        // largest epoch of 65 536 samples).
+        while s < end {
+            let w0 = s / WORD_SAMPLES;
+            let w1 = ((end - 1) / WORD_SAMPLES + 1).min(w0 + CHUNK_WORDS);
+            let stop = end.min(w1 * WORD_SAMPLES);
+            self.chunk(block, w0, w1, s, stop);
+            let m = (stop - s) as u64;
+            self.code.phase += m * self.code.step;
+            self.carrier.phase = self
+                .carrier
+                .phase
+                .wrapping_add(self.carrier.step.wrapping_mul(m as u32));
+            let advance = i64::from(self.carrier.step as i32) * m as i64;
+            self.carrier_total = self.carrier_total.wrapping_add(advance);
+            self.samples = self.samples.saturating_add(m as u32);
+            s = stop;
+        }
+    }
+
+    /// One chunk: the words `w0..w1` of the block, samples `s..stop` of them.
+    fn chunk(&mut self, block: &BitBlock<'_, A>, w0: usize, w1: usize, s: usize, stop: usize) {
+        let nw = (w1 - w0).min(CHUNK_WORDS);
+        let lead = s - w0 * WORD_SAMPLES;
+        let tail = w1 * WORD_SAMPLES - stop;
+        let l3 = self.levels == CarrierLevels::Three;
+        self.carrier_words(nw, lead, tail);
+        self.code_words(block.table(), nw, lead, tail);
+        if l3 {
+            for c in self.work.carrier.iter().take(nw) {
+                self.support[0] += kernel::popcount(c.nzc);
+                self.support[1] += kernel::popcount(c.nzs);
+            }
+        } else {
+            let m = (stop - s) as u32;
+            self.support[0] += m;
+            self.support[1] += m;
+        }
+        let (cx, tb) = (self.format.complex, self.format.two_bit());
+        let edges = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
+        let work = &mut self.work;
+        for (a, acc) in self.acc.iter_mut().enumerate() {
+            let Some(planes) = block.planes(a) else {
+                continue;
+            };
+            let Some(p) = chunk_planes(planes, w0, w0 + nw, self.format) else {
+                continue;
+            };
+            let all = a == 0 || self.slave_taps == SlaveTaps::All;
+            let n = (nw, edges);
+            match (cx, tb, l3) {
+                (true, false, false) => antenna::<true, false, false>(p, work, n, all, acc),
+                (true, true, false) => antenna::<true, true, false>(p, work, n, all, acc),
+                (true, false, true) => antenna::<true, false, true>(p, work, n, all, acc),
+                (true, true, true) => antenna::<true, true, true>(p, work, n, all, acc),
+                (false, false, false) => antenna::<false, false, false>(p, work, n, all, acc),
+                (false, true, false) => antenna::<false, true, false>(p, work, n, all, acc),
+                (false, false, true) => antenna::<false, false, true>(p, work, n, all, acc),
+                (false, true, true) => antenna::<false, true, true>(p, work, n, all, acc),
+            }
+        }
+    }
+
+    /// The carrier words of the chunk's `nw` words into the workspace, with the span's edges
+    /// masked out (`lead` samples before the span in the first word, `tail` after it in the
+    /// last).
+    fn carrier_words(&mut self, nw: usize, lead: usize, tail: usize) {
+        let phase = self
+            .carrier
+            .phase
+            .wrapping_sub(self.carrier.step.wrapping_mul(lead as u32));
+        let step = CarrierStep::new(self.carrier.step);
+        let words = self.work.carrier.get_mut(..nw).unwrap_or_default();
+        carrier::fill(words, self.levels, phase, &step);
+        if let Some(first) = words.first_mut() {
+            let mask = u32::MAX << (lead & 31);
+            first.nzc &= mask;
+            first.nzs &= mask;
+        }
+        if let Some(last) = words.last_mut() {
+            let mask = u32::MAX >> (tail & 31);
+            last.nzc &= mask;
+            last.nzs &= mask;
+        }
+    }
+
+    /// The code words of the chunk's four taps (E, P, L, N) into the workspace: the prompt
+    /// string with margins for the shifted taps, the taps as 32-bit windows of it, masked with
+    /// the carrier supports (3-level) or the span's edges (2-level).
+    fn code_words(&mut self, table: &CodeTable, nw: usize, lead: usize, tail: usize) {
+        let d = self.offset;
+        let back = self.noise_delay.max(d).div_ceil(WORD_SAMPLES);
+        let forward = d.div_ceil(WORD_SAMPLES);
+        let words = nw + back + forward + 1;
+        let step = self.code.step;
+        // Code phase at the first sample of the first prompt word.
+        let behind = ((lead + back * WORD_SAMPLES) as u64 * step) % CODE_WRAP;
+        let first = (self.code.phase % CODE_WRAP + CODE_WRAP - behind) % CODE_WRAP;
+        let mut at = CodeCursor::from_phase(first);
+        let word_step = WORD_SAMPLES as u64 * step;
+        let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
+        let step4 = (step >> 2) as u32;
+        let work = &mut self.work;
+        // Two passes (the word starts, then the words) keep each loop's state in registers.
+        for c in work.cursors.iter_mut().take(words) {
+            *c = at;
+            at.advance(chips, frac);
+        }
+        for (p, &c) in work.prompt.iter_mut().zip(work.cursors.iter()).take(words) {
+            *p = code::prompt_word(&self.ext, table, c, step4);
+        }
+        let base = back * WORD_SAMPLES;
+        let offsets = [base + d, base, base - d, base - self.noise_delay];
+        for (taps, offset) in work.taps.iter_mut().zip(offsets) {
+            window_words(taps.get_mut(..nw).unwrap_or_default(), &work.prompt, offset);
+        }
+        if self.levels == CarrierLevels::Three {
+            let carrier = work.carrier.iter().take(nw);
+            for (tc, ts) in work.taps.iter_mut().zip(work.taps_s.iter_mut()) {
+                for ((c, s), r) in tc.iter_mut().zip(ts.iter_mut()).zip(carrier.clone()) {
+                    *s = *c & r.nzs;
+                    *c &= r.nzc;
+                }
+            }
+        } else {
+            let masks = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
+            for taps in work.taps.iter_mut() {
+                if let Some(w) = taps.first_mut() {
+                    *w &= masks[0];
+                }
+                if let Some(w) = taps.get_mut(nw.wrapping_sub(1)) {
+                    *w &= masks[1];
+                }
+            }
+        }
+    }
+}
+
+/// The chunk loop's scratch: the replica of one chunk, shared by the antennas, and the stream
+/// words of the antenna being correlated (2.8 KiB).
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+struct Workspace {
+    carrier: [CarrierWords; CHUNK_WORDS],
+    /// The prompt string of the chunk and its margins.
+    prompt: [u32; PROMPT_WORDS],
+    /// The code phase at the start of every prompt word.
+    cursors: [CodeCursor; PROMPT_WORDS],
+    /// Code words per tap (E, P, L, N), masked with the `c ≠ 0` support (and the span).
+    taps: [[u32; CHUNK_WORDS]; 4],
+    /// The same masked with the `s ≠ 0` support (3-level carrier only).
+    taps_s: [[u32; CHUNK_WORDS]; 4],
+    streams: StreamWords,
+}
+
+impl Workspace {
+    const fn new() -> Self {
+        Self {
+            carrier: [CarrierWords {
+                c: 0,
+                s: 0,
+                d: 0,
+                nzc: 0,
+                nzs: 0,
+            }; CHUNK_WORDS],
+            prompt: [0; PROMPT_WORDS],
+            cursors: [CodeCursor { chip: 0, frac: 0 }; PROMPT_WORDS],
+            taps: [[0; CHUNK_WORDS]; 4],
+            taps_s: [[0; CHUNK_WORDS]; 4],
+            streams: [[0; CHUNK_WORDS]; MAX_STREAMS],
+        }
+    }
+}
+
+/// 32-bit windows of the prompt string: `out[i]` is bits `offset + 32·i …` of `prompt`.
+fn window_words(out: &mut [u32], prompt: &[u32; PROMPT_WORDS], offset: usize) {
+    let sh = (offset % WORD_SAMPLES) as u32;
+    let src = prompt.get(offset / WORD_SAMPLES..).unwrap_or_default();
+    for (o, pair) in out.iter_mut().zip(src.windows(2)) {
+        if let &[lo, hi] = pair {
+            *o = (lo >> sh) | ((hi << 1) << (31 - sh));
+        }
+    }
+}
+
+/// The chunk's words of an antenna's planes (absent planes replaced by the sign plane).
+fn chunk_planes<'a>(
+    p: &super::planes::AntennaPlanes<'a>,
+    w0: usize,
+    w1: usize,
+    format: PlaneFormat,
+) -> Option<ChunkPlanes<'a>> {
+    let a = p.sign_i().get(w0..w1)?;
+    let two = format.two_bit();
+    let ma = if two { p.mag_i().get(w0..w1)? } else { a };
+    let b = if format.complex {
+        p.sign_q().get(w0..w1)?
+    } else {
+        a
+    };
+    let mb = if two && format.complex {
+        p.mag_q().get(w0..w1)?
+    } else {
+        a
+    };
+    Some(ChunkPlanes { a, ma, b, mb })
+}
+
+/// One antenna over one chunk: its stream words, then the population counts of every
+/// stream against the code words of every tap it computes (all four for the reference antenna,
+/// or for every antenna with [`SlaveTaps::All`]; the prompt otherwise). `chunk` is the word
+/// count and the span's masks of the first and last word.
+#[inline(never)]
+fn antenna<const CX: bool, const TB: bool, const L3: bool>(
+    p: ChunkPlanes<'_>,
+    work: &mut Workspace,
+    chunk: (usize, [u32; 2]),
+    all_taps: bool,
+    acc: &mut [[u32; MAX_STREAMS]; 4],
+) {
+    let (n, [lead_mask, tail_mask]) = chunk;
+    let n = n.min(CHUNK_WORDS);
+    let j_count = kernel::stream_count(CX, TB, L3);
+
+    let scratch = &mut work.streams;
+    kernel::prepare::<CX, TB, L3>(p, work.carrier.get(..n).unwrap_or_default(), scratch);
+    if !L3 {
+        // The 2-level streams are masked at the span's edges only.
+        for stream in scratch.iter_mut().take(j_count) {
+            if let Some(w) = stream.first_mut() {
+                *w &= lead_mask;
+            }
+            if let Some(w) = stream.get_mut(n.wrapping_sub(1)) {
+                *w &= tail_mask;
+            }
+        }
+    }
+    let taps: &[usize] = if all_taps {
+        &[EARLY, PROMPT, LATE, NOISE]
+    } else {
+        &[PROMPT]
+    };
+    for &t in taps {
+        let (Some(code_c), Some(code_s), Some(sums)) =
+            (work.taps.get(t), work.taps_s.get(t), acc.get_mut(t))
+        else {
+            continue;
+        };
+        let code_s = if L3 { code_s } else { code_c };
+        let code = |j: usize| {
+            let code = if kernel::stream_uses_s(CX, TB, L3, j) {
+                code_s
+            } else {
+                code_c
+            };
+            code.get(..n).unwrap_or_default()
+        };
+        let x = |j: usize| scratch.get(j).and_then(|s| s.get(..n)).unwrap_or_default();
+        for (j, sum) in sums.iter_mut().enumerate().take(j_count) {
+            *sum += kernel::xor_count(x(j), code(j));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_is_as_documented() {
+        // The module documentation quotes these sizes.
+        assert_eq!(core::mem::size_of::<Workspace>(), 3324);
+        let size = core::mem::size_of::<BitCorrelator<3>>();
+        assert!((3900..4100).contains(&size), "{size}");
+        assert_eq!(core::mem::size_of::<CodeTable>(), 8192 + 8);
+    }
+}
