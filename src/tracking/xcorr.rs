@@ -22,8 +22,13 @@
 //! # The test ([`cross_correlation_source`])
 //! A victim (signal power `S_v`) is explained by the others when
 //! `S_v ≤ margin · X_v` with `X_v = Σ_j X_j + 2 Σ_{j<j' coherent} √(X_j X_j')`, `X_j = S_j ·
-//! max|R_jv|²` over the others stronger than the victim (`S_j > S_v`), the maximum taken over
-//! a small grid of lags and Doppler offsets around the nominal ones (the estimates' errors).
+//! (max|R_jv|² − 1/1023)⁺` over the others stronger than the victim (`S_j > S_v`), the maximum
+//! taken over a small grid of lags and Doppler offsets around the nominal ones (the estimates'
+//! errors). The victim's power has its background removed, and every background (the mean
+//! cell of a search, a channel's noise tap) already holds the mean of `|R_jv|²` over code
+//! lags, [`MEAN_FRACTION`]: only the excess at the victim's lag can make a peak. (Without
+//! that, a real 45 dB-Hz satellite among eleven stronger ones up to 60 dB-Hz was predicted
+//! within 2 dB of its own power and refused.)
 //! Two others add coherently when their Doppler difference is within `coherence_hz` of a
 //! multiple of 1 kHz (their relative phase then barely turns within the integration).
 //! Bounded: `others.len()` × [`GRID_POINTS`] sums of 1023 terms, plus the pairs.
@@ -40,6 +45,11 @@ const GRID_DOPPLER_FRACTIONS: [f32; 3] = [-1.0, 0.0, 1.0];
 
 /// Grid points of one cross-correlation maximum.
 pub const GRID_POINTS: usize = GRID_LAG_FRACTIONS.len() * GRID_DOPPLER_FRACTIONS.len();
+
+/// The mean of `|R_ab|²` over code lags, `1/1023` (the Gold codes' cross-correlation energy
+/// spread over the code period): the part of a stronger signal's cross-correlation every
+/// background estimate already holds.
+pub const MEAN_FRACTION: f32 = 1.0 / CA_CODE_LENGTH as f32;
 
 /// Most other signals one test considers (satellites in view of one antenna).
 pub const MAX_OTHERS: usize = 32;
@@ -199,7 +209,7 @@ pub fn cross_correlation_source(
         .iter()
         .filter(|o| o.prn != victim.prn && o.power > victim.power && o.power.is_finite());
     for (slot, other) in contributions.iter_mut().zip(stronger) {
-        let x = other.power * largest_fraction(victim, other, test);
+        let x = other.power * (largest_fraction(victim, other, test) - MEAN_FRACTION).max(0.0);
         *slot = (x, other.doppler_hz);
         count += 1;
         if strongest.is_none_or(|(_, s)| x > s) {
@@ -326,5 +336,39 @@ mod tests {
         assert!(!cross_correlation_source(&real, &[strong], &TEST).explained);
         let alone = cross_correlation_source(&victim, &[], &TEST);
         assert!(!alone.explained && alone.strongest_source.is_none());
+    }
+    /// A real 45 dB-Hz satellite among eleven stronger ones (46–60 dB-Hz: a synthesized
+    /// static sky, truth code phases and Dopplers) is not explained: the others' mean
+    /// cross-correlation is in the background already; only their excess at its lag counts.
+    #[test]
+    fn a_weak_real_satellite_among_many_strong_ones_is_not_explained() {
+        let sky: [(u8, f32, f32, f64); 12] = [
+            (2, 58.64, -4021.9, 830.43),
+            (6, 46.36, -809.2, 459.68),
+            (7, 49.09, 2363.9, 252.49),
+            (10, 53.18, 976.2, 1012.85),
+            (12, 55.91, -2978.6, 242.10),
+            (15, 54.55, 3046.9, 676.52),
+            (19, 50.45, -1268.6, 630.50),
+            (22, 57.27, 3354.8, 952.61),
+            (25, 51.82, -4381.3, 218.46),
+            (26, 60.00, -4342.4, 168.19),
+            (28, 45.00, -4178.4, 990.46),
+            (30, 47.73, -2954.6, 436.82),
+        ];
+        let probes = sky.map(|(p, cn0, f, tau)| SignalProbe {
+            sample: 0,
+            ..probe(p, tau, f, 10f32.powf(cn0 / 10.0))
+        });
+        let test = CrossCorrelationTest {
+            doppler_tolerance_hz: 125.0,
+            lag_tolerance_chips: 1023.0 / 2048.0,
+            ..TEST
+        };
+        for victim in probes.iter().filter(|p| p.power < 10f32.powf(4.7)) {
+            let v = cross_correlation_source(victim, &probes, &test);
+            assert!(!v.explained, "PRN {}: {v:?}", victim.prn.number());
+            assert!(victim.power > 4.0 * v.predicted_power, "{v:?}");
+        }
     }
 }
