@@ -188,7 +188,8 @@ pub fn chain_params(
         satellites,
         antennas_b: world.antennas.iter().map(|a| a.position).collect(),
         line_bias_cycles: world
-            .line_bias_rad
+            .line_bias
+            .at(0.5 * duration_s)
             .iter()
             .map(|b| b / std::f64::consts::TAU)
             .collect(),
