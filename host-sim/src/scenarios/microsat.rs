@@ -178,6 +178,13 @@ crate::metrics! {
         #[metric(unit = "")] pub sample_level_searches: usize,
         /// Satellites the sample-level acquisition found (a channel each).
         #[metric(unit = "")] pub sample_level_found: usize,
+        /// Searches of PRNs the receiver predicted (almanac, orbit, its own attitude) that no
+        /// antenna received.
+        #[metric(unit = "")] pub sample_level_searches_absent: usize,
+        /// Detections of a PRN the reference antenna did not receive.
+        #[metric(unit = "")] pub sample_level_false_alarms: usize,
+        /// Searches of a received PRN that found nothing.
+        #[metric(unit = "")] pub sample_level_missed: usize,
         /// Sample-level tracking epochs that arrived after their filter epoch.
         #[metric(unit = "")] pub sample_level_late: usize,
         /// Observations the sample-level chain delivered.
@@ -244,6 +251,9 @@ fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Met
             sample_level_s: record.sample_level_s,
             sample_level_searches: st.searches,
             sample_level_found: st.detections,
+            sample_level_searches_absent: st.searches_absent,
+            sample_level_false_alarms: st.false_alarms,
+            sample_level_missed: st.missed,
             sample_level_late: st.late,
             sample_level_observations: st.observations,
             sample_level_wall_s: record.wall_s.0,
@@ -266,13 +276,16 @@ fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightM
     };
     let mut lines = vec![
         format!(
-            "sample-level chain for the first {:.0} s: {} satellites in the scene (|Doppler| ≤ {:.1} kHz, |rate| ≤ {:.0} Hz/s), {} searches ±50 kHz, {} found (a channel each); {} observations, {} late; wall {:.1} s (synthesis {:.1}, acquisition {:.1}, tracking {:.1}), fast path {:.1} s",
+            "sample-level chain for the first {:.0} s: {} satellites in the scene (|Doppler| ≤ {:.1} kHz, |rate| ≤ {:.0} Hz/s), {} searches ±50 kHz of the PRNs the almanac predicts ({} of PRNs not received), {} found (a channel each), {} false alarms, {} missed; {} observations, {} late; wall {:.1} s (synthesis {:.1}, acquisition {:.1}, tracking {:.1}), fast path {:.1} s",
             record.sample_level_s,
             st.satellites,
             st.max_doppler_hz / 1e3,
             st.max_doppler_rate_hz_s,
             st.searches,
+            st.searches_absent,
             st.detections,
+            st.false_alarms,
+            st.missed,
             st.observations,
             st.late,
             record.wall_s.0,

@@ -472,6 +472,19 @@ struct Events<'a> {
 }
 
 impl Events<'_> {
+    /// The largest |error| (°) of the records in `[from, to]` with an attitude, and whether
+    /// every one of them was inside 3σ on every axis.
+    fn worst_against_sigma(&self, from: f64, to: f64) -> (f64, bool) {
+        let inside = |s: &Sample| (0..3).all(|a| s.error[a].abs() <= 3.0 * s.sigma[a]);
+        self.record
+            .samples
+            .iter()
+            .filter(|s| s.t >= from && s.t <= to && has_attitude(s))
+            .fold((0.0, true), |(w, ok), s| {
+                (w.max(s.error.amax().to_degrees()), ok && inside(s))
+            })
+    }
+
     /// The time of the first event in `[from, to]` that satisfies `pred`.
     fn find(&self, from: f64, to: f64, pred: &dyn Fn(&ReceiverEvent) -> bool) -> Option<f64> {
         self.record
@@ -615,7 +628,14 @@ fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutco
                     "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
                     t - ts
                 ),
-                _ => "not detected".into(),
+                _ => {
+                    let (worst, inside) = ev.worst_against_sigma(ts, ts + WINDOW.slip_found);
+                    format!(
+                        "not detected; the block measurements are 2π-periodic, so a whole-cycle slip leaves nothing to detect: largest error within {:.0} s {worst:.4}°, {}",
+                        WINDOW.slip_found,
+                        if inside { "inside 3σ throughout" } else { "outside 3σ at times" }
+                    )
+                }
             }
         ),
     }

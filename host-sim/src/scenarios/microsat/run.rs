@@ -518,7 +518,7 @@ impl<'a> Flight<'a> {
     fn observe(&mut self, e: &EpochTruth) -> Result<usize> {
         let mut tracked = 0;
         if let (Some(sl), true) = (self.sample_level.as_mut(), e.in_samples) {
-            tracked += sl.epoch(e.k, &mut self.rx)?.observations as usize;
+            tracked += sl.epoch(e.k, &mut self.rx, &self.world)?.observations as usize;
         }
         if e.in_samples {
             return Ok(tracked);
