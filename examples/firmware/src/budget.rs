@@ -121,6 +121,7 @@ pub fn run_all() -> Option<ReceiverOutcome> {
     gyro_budgets();
     one_stage_budgets();
     let receiver = receiver_budgets();
+    gyro_aided_budgets();
     nav_budgets();
     receiver
 }
@@ -714,6 +715,62 @@ pub fn receiver_budgets() -> Option<ReceiverOutcome> {
         epoch: att.epoch,
         refusals,
     })
+}
+
+/// The receiver's block stage alone: the gyro-aided fine filter's prediction over one 20 ms
+/// block and its update with 8 satellites' block phase differences (the example flight's
+/// sky and antennas, phases consistent with the prior attitude), each in a region.
+// (not inlined: see the other groups)
+#[inline(never)]
+fn gyro_aided_budgets() {
+    use gnss_attitude::attitude::gyro_aided::{GyroAidedConfig, GyroAidedFilter, GyroAidedPrior, PhaseDifferenceBlock};
+    use gnss_attitude::receiver::example::{antennas, ExampleFlight};
+    use nalgebra::Matrix2;
+    const WAVELENGTH_M: f32 = 0.190_293_7;
+    let config = GyroAidedConfig {
+        wavelength_m: WAVELENGTH_M,
+        angle_random_walk: 1e-4,
+        bias_random_walk: 1e-5,
+        line_bias_random_walk: 1e-4,
+        gate: Some(GateConfidence::P999),
+    };
+    let [a, b, c] = antennas().map(Vector3::from);
+    let baselines = [b - a, c - a];
+    let q = Quaternion::from_rotation_vector(&Vector3::new(0.3f32, -0.2, 1.1));
+    let prior = GyroAidedPrior {
+        q_rb: q,
+        attitude_covariance: Matrix3::identity() * 1e-6,
+        bias_sigma: 1e-4,
+        line_bias: Vector2::zeros(),
+        line_bias_covariance: Matrix2::identity() * 1e-4,
+    };
+    let m = Quaternion::identity();
+    let Ok(mut f) = GyroAidedFilter::new(config, baselines, &prior, &m) else {
+        hprintln!("gyro-aided budgets: filter refused");
+        return;
+    };
+    let c_rb = q.to_dcm();
+    let k = core::f32::consts::TAU / WAVELENGTH_M;
+    let blocks: [PhaseDifferenceBlock<f32>; 8] = core::array::from_fn(|i| {
+        let los = ExampleFlight::los(i);
+        let s = c_rb.transpose() * los;
+        PhaseDifferenceBlock {
+            id: i as u8 + 1,
+            los,
+            phase_rad: Vector2::new(k * s.dot(&baselines[0]), k * s.dot(&baselines[1])),
+            covariance: Matrix2::new(2e-3, 1e-3, 1e-3, 2e-3),
+        }
+    });
+    let predicted = measure("receiver sub-stage: gyro-aided fine filter predict over one 20 ms block (8 states)", || {
+        black_box(&mut f).predict(black_box(&m), black_box(0.02)).is_ok()
+    });
+    let report = measure("receiver sub-stage: gyro-aided fine filter update, 8 sats x 2 baselines (8 gated 2-D updates, fold-in)", || {
+        black_box(&mut f).update(black_box(&m), black_box(&blocks[..]))
+    });
+    match report {
+        Ok(r) => hprintln!("gyro-aided budgets: predict ok {}, update accepted {} of {}", predicted, r.accepted, r.offered),
+        Err(e) => hprintln!("gyro-aided budgets: update refused: {:?}", e),
+    }
 }
 
 /// The bit-parallel correlator on the i8 correlator's case (3 antennas x 1 satellite, one 1 ms

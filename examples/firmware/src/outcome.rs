@@ -63,10 +63,19 @@ fn verdict(pass: bool) -> &'static str {
 
 /// The attitude error, its 1σ and the limit it must meet (degrees): the smaller of
 /// [`SIGMA_FACTOR`] σ and [`SNAPSHOT_LIMIT_DEG`].
-fn snapshot_error(solution: &gnss_attitude::attitude::snapshot::SnapshotSolution<f32>) -> (f32, f32, f32) {
-    let error_deg = solution.q_rb.angle_to(&truth(example::attitude().to_quaternion())).to_degrees();
+fn snapshot_error(
+    solution: &gnss_attitude::attitude::snapshot::SnapshotSolution<f32>,
+) -> (f32, f32, f32) {
+    let error_deg = solution
+        .q_rb
+        .angle_to(&truth(example::attitude().to_quaternion()))
+        .to_degrees();
     let sigma_deg = nalgebra::ComplexField::sqrt(solution.covariance.trace().max(0.0)).to_degrees();
-    (error_deg, sigma_deg, (SIGMA_FACTOR * sigma_deg).min(SNAPSHOT_LIMIT_DEG))
+    (
+        error_deg,
+        sigma_deg,
+        (SIGMA_FACTOR * sigma_deg).min(SNAPSHOT_LIMIT_DEG),
+    )
 }
 
 /// Paper 002's snapshot solver on the example epoch.
