@@ -19,6 +19,8 @@ use super::world::{Blockage, LineBiasTruth, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
 use crate::truth::sky::GpsView;
+use gnss_attitude::receiver::{AdapterConfig, NoiseFloor};
+use gnss_attitude::signal::correlator::{EpochCorrelations, Iq, Taps};
 use gnss_attitude::signal::Prn;
 
 /// Gyro sample interval, s.
@@ -275,6 +277,8 @@ struct Flight<'a> {
     views: (Vec<GpsView>, Vec<GpsView>),
     /// Whether each satellite was above the reference antenna's mask.
     was_visible: BTreeMap<u8, bool>,
+    /// The fast path's noise floor: the core's, from the emulated channels' noise taps.
+    noise: NoiseFloor,
     started: std::time::Instant,
 }
 
@@ -336,6 +340,7 @@ impl<'a> Flight<'a> {
             per_block: (AIDING_S / EPOCH_S).round() as u64,
             views: (Vec::new(), Vec::new()),
             was_visible: BTreeMap::new(),
+            noise: NoiseFloor::new(AdapterConfig::default().noise_time_constant),
             started: std::time::Instant::now(),
         })
     }
@@ -532,7 +537,13 @@ impl<'a> Flight<'a> {
                 continue;
             }
             let psi = [0, 1, 2].map(|p| self.world.geometric_phase(p, &s.view.los, &e.c_ib));
-            let obs = ch.observe(e.k, e.tc, s, psi, line_bias, &mut self.rng);
+            let (mut obs, noise) = ch.observe(e.k, e.tc, s, psi, line_bias, &mut self.rng);
+            self.noise.add(&noise_taps(noise));
+            // the noise variance the receiver measures, as its adapter does from samples
+            let Some(var) = self.noise.variance(AdapterConfig::default().noise_min_taps) else {
+                continue;
+            };
+            obs.noise_var = var[0];
             match self.rx.receiver_mut().push_observation(e.k, &obs) {
                 Ok(()) => tracked += 1,
                 Err(gnss_attitude::receiver::ReceiverError::NoAiding) => {}
@@ -766,6 +777,22 @@ fn bound_now(world: &World, truths: &[SatTruth], t: f64, bandwidth_hz: f64) -> V
         .collect();
     let positions = world.antennas.map(|a| a.position);
     bound_rad(&positions, &usable, bandwidth_hz).unwrap_or_else(nan3)
+}
+
+/// One epoch's correlations carrying only the noise taps of A, B, C (what the noise floor
+/// reads).
+fn noise_taps(noise: [Iq; 3]) -> EpochCorrelations<3> {
+    EpochCorrelations {
+        taps: noise.map(|n| Taps {
+            noise: n,
+            ..Taps::default()
+        }),
+        samples: 0,
+        first_sample: 0,
+        code_phase_at_first: 0,
+        carrier_phase_at_first: 0,
+        complete: true,
+    }
 }
 
 /// The carrier-phase information rate at `t` of the satellites at least two antennas receive.
