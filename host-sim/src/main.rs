@@ -126,7 +126,8 @@ struct TrackArgs {
     /// Sky file (lines 'prn,azimuth_deg,elevation_deg'; NED reference frame).
     #[arg(long)]
     sky: Option<PathBuf>,
-    /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2'.
+    /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2' (a bench
+    /// calibration; without it they are estimated with the integers in each window).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     line_bias: Option<Vec<f64>>,
     /// Attitude window, s.
@@ -548,14 +549,18 @@ fn attitude_setup(
     let sky = sky.context("--baselines needs --sky (the lines of sight)")?;
     let text = std::fs::read_to_string(sky)
         .with_context(|| format!("reading the sky file {}", sky.display()))?;
-    let bias = line_bias.unwrap_or_else(|| vec![0.0, 0.0]);
-    anyhow::ensure!(
-        bias.len() == 2 && bias.iter().all(|b| b.is_finite()),
-        "--line-bias needs two values (antennas 1 and 2, cycles)"
-    );
+    let bias = line_bias
+        .map(|b| {
+            anyhow::ensure!(
+                b.len() == 2 && b.iter().all(|v| v.is_finite()),
+                "--line-bias needs two values (antennas 1 and 2, cycles)"
+            );
+            Ok([b[0], b[1]])
+        })
+        .transpose()?;
     Ok(Some(record::attitude::AttitudeSetup {
         baselines_body_m: record::attitude::parse_baselines(baselines)?,
-        line_bias_cycles: [bias[0], bias[1]],
+        line_bias_cycles: bias,
         sky: record::attitude::parse_sky(&text)
             .with_context(|| format!("sky file {}", sky.display()))?,
         window_s,

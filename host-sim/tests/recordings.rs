@@ -229,42 +229,57 @@ fn three_antenna_recording_gives_the_attitude() {
         let rec = open(&paths, &truth);
         let sky = std::fs::read_to_string(dir.join(format!("{layout}.sky.csv"))).unwrap();
         let b = &truth.baselines_body_m;
-        let opts = TrackOptions {
-            acquire: AcquireOptions {
-                prns: truth.satellites.iter().map(|s| s.prn).collect(),
-                ..AcquireOptions::default()
-            },
-            attitude: Some(AttitudeSetup {
-                baselines_body_m: [b[0], b[1]],
-                line_bias_cycles: [truth.line_bias_cycles[0], truth.line_bias_cycles[1]],
-                sky: parse_sky(&sky).unwrap(),
-                window_s: 1.0,
-            }),
-            ..TrackOptions::default()
-        };
-        let run = record::track(&rec, &opts).unwrap();
-        let att = run.report.attitude.unwrap();
-        eprintln!(
-            "{layout}: {} of {} windows fixed, mean {:?}, spread {:?}, formal {:?}",
-            att.fixed, att.windows, att.ypr_mean_deg, att.ypr_std_deg, att.ypr_sigma_mean_deg
-        );
-        assert_eq!(att.windows, 3);
-        // The first window holds the pull-in (lock at 0.4 s): refused, not guessed.
-        assert!(att.per_window[0].refused.is_some());
-        assert_eq!(att.fixed, 2);
-        let worst = att
-            .per_window
-            .iter()
-            .filter_map(|w| w.ypr_deg)
-            .flat_map(|w| (0..3).map(move |j| (w[j] - truth.attitude_ypr_deg[j]).abs()))
-            .fold(0.0, f64::max);
-        eprintln!("{layout}: largest per-window angle error {worst:.4} deg");
-        for w in att.per_window.iter().filter_map(|w| w.ypr_deg) {
-            for j in 0..3 {
-                assert!(
-                    (w[j] - truth.attitude_ypr_deg[j]).abs() < 0.05,
-                    "{layout}: {w:?}"
-                );
+        let bench = [truth.line_bias_cycles[0], truth.line_bias_cycles[1]];
+        // with a bench calibration of the line biases, and without (estimated per window)
+        for calibration in [Some(bench), None] {
+            let opts = TrackOptions {
+                acquire: AcquireOptions {
+                    prns: truth.satellites.iter().map(|s| s.prn).collect(),
+                    ..AcquireOptions::default()
+                },
+                attitude: Some(AttitudeSetup {
+                    baselines_body_m: [b[0], b[1]],
+                    line_bias_cycles: calibration,
+                    sky: parse_sky(&sky).unwrap(),
+                    window_s: 1.0,
+                }),
+                ..TrackOptions::default()
+            };
+            let run = record::track(&rec, &opts).unwrap();
+            let att = run.report.attitude.unwrap();
+            eprintln!(
+                "{layout}: {} of {} windows fixed, mean {:?}, spread {:?}, formal {:?}",
+                att.fixed, att.windows, att.ypr_mean_deg, att.ypr_std_deg, att.ypr_sigma_mean_deg
+            );
+            assert_eq!(att.windows, 3);
+            // The first window holds the pull-in (lock at 0.4 s): refused, not guessed.
+            assert!(att.per_window[0].refused.is_some());
+            assert_eq!(att.fixed, 2);
+            let worst = att
+                .per_window
+                .iter()
+                .filter_map(|w| w.ypr_deg)
+                .flat_map(|w| (0..3).map(move |j| (w[j] - truth.attitude_ypr_deg[j]).abs()))
+                .fold(0.0, f64::max);
+            eprintln!("{layout}: largest per-window angle error {worst:.4} deg");
+            for w in att.per_window.iter().filter_map(|w| w.ypr_deg) {
+                for j in 0..3 {
+                    assert!(
+                        (w[j] - truth.attitude_ypr_deg[j]).abs() < 0.05,
+                        "{layout}: {w:?}"
+                    );
+                }
+            }
+            if calibration.is_none() {
+                assert!(att.line_bias_estimated);
+                let est = att.line_bias_cycles.expect("estimated line biases");
+                for (e, t) in est.iter().zip(&bench) {
+                    let err = (e - t) - (e - t).round();
+                    assert!(
+                        err.abs() < 0.02,
+                        "{layout}: line biases {est:?} vs {bench:?}"
+                    );
+                }
             }
         }
     }

@@ -74,16 +74,27 @@ impl<T: Real> Quaternion<T> {
         if !self.is_finite() {
             return Err(GeometryError::NonFinite);
         }
-        let n = self.norm();
-        if !(n > T::default_epsilon().sqrt() * real(0.01)) {
+        // scaled by the largest component first: the squares of huge components would
+        // overflow (and of tiny ones underflow) before the square root
+        let largest = [self.x, self.y, self.z]
+            .iter()
+            .fold(self.w.abs(), |m, c| m.max(c.abs()));
+        if !(largest > T::zero()) {
+            return Err(GeometryError::ZeroLength);
+        }
+        let s = T::one() / largest;
+        let scaled = Self::new(self.w * s, self.x * s, self.y * s, self.z * s);
+        let n = scaled.norm();
+        // the norm is `largest · n` (n in [1, 2]); it may overflow to +∞, which passes
+        if !(largest * n > T::default_epsilon().sqrt() * real(0.01)) {
             return Err(GeometryError::ZeroLength);
         }
         let inv = T::one() / n;
         Ok(Self::new(
-            self.w * inv,
-            self.x * inv,
-            self.y * inv,
-            self.z * inv,
+            scaled.w * inv,
+            scaled.x * inv,
+            scaled.y * inv,
+            scaled.z * inv,
         ))
     }
 
@@ -271,6 +282,30 @@ mod tests {
     use super::*;
     use crate::geometry::{rot_x, rot_z};
     use core::f64::consts::PI;
+
+    /// Components whose squares overflow (or underflow) f32 still give the unit quaternion.
+    #[test]
+    fn huge_and_tiny_quaternions_normalize() {
+        let huge = Quaternion::<f32>::new(3e30, -4e30, 0.0, 0.0)
+            .normalize()
+            .unwrap();
+        assert!(
+            (huge.w - 0.6).abs() < 1e-6 && (huge.x + 0.8).abs() < 1e-6,
+            "{huge:?}"
+        );
+        let max = Quaternion::<f32>::new(f32::MAX, f32::MAX, 0.0, 0.0)
+            .normalize()
+            .unwrap();
+        assert!((max.norm() - 1.0).abs() < 1e-6, "{max:?}");
+        assert_eq!(
+            Quaternion::<f32>::new(1e-20, 0.0, 0.0, 0.0).normalize(),
+            Err(GeometryError::ZeroLength)
+        );
+        assert_eq!(
+            Quaternion::<f32>::new(0.0, 0.0, 0.0, 0.0).normalize(),
+            Err(GeometryError::ZeroLength)
+        );
+    }
 
     fn q(w: f64, x: f64, y: f64, z: f64) -> Quaternion<f64> {
         Quaternion::new(w, x, y, z).normalize().unwrap()

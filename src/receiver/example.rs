@@ -169,13 +169,17 @@ impl ExampleFlight {
                 *pi = a * libm::cosf(psi) + NOISE_SIGMA * ni;
                 *pq = a * libm::sinf(psi) + NOISE_SIGMA * nq;
             }
-            let _ = out.push(SatelliteObservation {
+            let observation = SatelliteObservation {
                 id: *prn,
                 los: [los.x, los.y, los.z],
                 prompt,
                 noise_var: NOISE_SIGMA * NOISE_SIGMA,
                 cn0_dbhz: CN0_DBHZ,
-            });
+            };
+            // the sky holds at most MAX_SATELLITES satellites: a full vector ends the epoch
+            if out.push(observation).is_err() {
+                break;
+            }
         }
         out
     }

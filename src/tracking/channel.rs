@@ -423,8 +423,8 @@ impl<const A: usize> Channel<A> {
     /// detector (and the C/N0 until the first long window).
     fn update_windows(&mut self, reference: &Taps, samples: u32, t: f32) {
         let cfg = self.config;
-        self.lock_window.add(reference, samples, self.complex);
-        self.cn0_window.add(reference, samples, self.complex);
+        self.lock_window.add_taps(reference, samples, self.complex);
+        self.cn0_window.add_taps(reference, samples, self.complex);
         if self.lock_window.count() >= u32::from(cfg.lock_window) {
             if let Some(e) = self.lock_window.finish(t) {
                 self.lock.update(&e);

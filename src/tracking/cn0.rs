@@ -27,7 +27,7 @@
 //! floor is flagged ([`WindowEstimate::quantization_limited`]): its C/N0 is the signal over the
 //! samples' rounding, not over thermal noise.
 
-use crate::signal::correlator::Taps;
+use crate::signal::correlator::{Iq, Taps};
 use crate::signal::nco::CARRIER_AMPLITUDE;
 
 /// Power scale of the window sums (keeps them well inside f32 over long windows).
@@ -77,9 +77,21 @@ pub struct WindowEstimate {
 }
 
 impl PowerWindow {
+    /// Adds one epoch of the prompt and noise taps alone (values that are no sums of integer
+    /// samples: no quantization floor). Without early and late taps the shape is not
+    /// measured: it reads 1 (no correlation peak), never a triangle.
+    pub fn add(&mut self, prompt: &Iq, noise: &Iq) {
+        let (i, q) = (prompt.i as f32, prompt.q as f32);
+        self.sum_i2 += i * i * POWER_SCALE;
+        self.sum_q2 += q * q * POWER_SCALE;
+        self.sum_n2 += noise.power() * POWER_SCALE;
+        self.sum_el2 += prompt.power() * POWER_SCALE;
+        self.count += 1;
+    }
+
     /// Adds one epoch of the reference antenna's taps over `samples` samples (`complex`:
-    /// I/Q samples).
-    pub fn add(&mut self, taps: &Taps, samples: u32, complex: bool) {
+    /// I/Q samples), with the samples' quantization floor and the correlation shape.
+    pub fn add_taps(&mut self, taps: &Taps, samples: u32, complex: bool) {
         let (i, q) = (taps.prompt.i as f32, taps.prompt.q as f32);
         self.sum_i2 += i * i * POWER_SCALE;
         self.sum_q2 += q * q * POWER_SCALE;
@@ -142,7 +154,6 @@ impl PowerWindow {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::signal::correlator::Iq;
 
     fn taps(p: (i32, i32), el: i32, n: (i32, i32)) -> Taps {
         Taps {
@@ -160,7 +171,7 @@ mod tests {
     fn the_noise_floor_keeps_cn0_finite_and_says_so() {
         let mut w = PowerWindow::default();
         for _ in 0..100 {
-            w.add(&taps((2_000_000, 0), 1_000_000, (0, 0)), 2600, true);
+            w.add_taps(&taps((2_000_000, 0), 1_000_000, (0, 0)), 2600, true);
         }
         let e = w.finish(1e-3).unwrap();
         let floor = 127.0f32 * 127.0 * 2600.0 * 2.0 / 12.0;
@@ -170,7 +181,7 @@ mod tests {
         assert!((e.shape - 0.25).abs() < 0.01, "{e:?}");
         let mut w = PowerWindow::default();
         for _ in 0..100 {
-            w.add(&taps((200_000, 0), 200_000, (20_000, 0)), 2600, true);
+            w.add_taps(&taps((200_000, 0), 200_000, (20_000, 0)), 2600, true);
         }
         let e = w.finish(1e-3).unwrap();
         let expected = 10.0 * ((200_000.0f32.powi(2) - 4e8) / (4e8 * 1e-3)).log10();

@@ -113,17 +113,22 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
 }
 
 /// Every budget of the firmware, in region order.
-pub fn run_all() {
+pub fn run_all() -> Option<ReceiverOutcome> {
     ekf_budgets();
     signal_budgets();
     snapshot_budgets();
     dcm_budgets();
     gyro_budgets();
     one_stage_budgets();
-    receiver_budgets();
+    let receiver = receiver_budgets();
+    gyro_aided_budgets();
     nav_budgets();
+    receiver
 }
 
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn ekf_budgets() {
     let model = ConstantVelocityModel::new(0.1, 0.2, 0.5);
     let mut cv = match Ekf::new(Vector4::new(1.0, 2.0, 0.5, -0.5), Matrix4::identity() * 4.0) {
@@ -160,6 +165,9 @@ fn ekf_budgets() {
 
 /// Paper 002: one snapshot solve (8 satellites, ambiguities known) and one solve from raw
 /// single differences with the constrained integer ambiguity search (8 satellites).
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn snapshot_budgets() {
     use gnss_attitude::attitude::example;
     let (Ok(solver), Ok(resolver)) = (example::solver(), example::resolver()) else {
@@ -209,6 +217,9 @@ fn resolve_once(
 }
 
 /// One step of each paper-000 filter on the paper's array (noise-free epoch near t = 1 s).
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn dcm_budgets() {
     let Ok(array) = AntennaArray::from_baselines(
         &black_box(Vector3::new(1.5f32, 1.8, 1.9)),
@@ -252,6 +263,9 @@ fn dcm_budgets() {
 
 /// Paper 001 §6 on the target: 30 s of the paper's rates with its gyro errors against a perfect
 /// reference (131 epochs, 393 rows), then one of each step on the filled accumulators.
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn gyro_budgets() {
     const RATES: [[f32; 3]; 6] = [
         [0.01, 0.02, -0.01],
@@ -382,6 +396,9 @@ fn one_stage_observations(
     out
 }
 
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn one_stage_budgets() {
     let Ok(array) = AntennaArray::paper_triangle(1.5f32) else { return };
     let obs = one_stage_observations(&array);
@@ -394,6 +411,9 @@ fn one_stage_budgets() {
 
 /// The adapter from the tracking channels: one `TrackingEpoch<3>` → observation and its
 /// filter epoch (per channel and code period).
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn one_stage_adapter_budget() {
     let taps = |p: i32, n: i32| Taps {
         prompt: Iq { i: 40_000 + p, q: -25_000 + 3 * p },
@@ -457,6 +477,9 @@ fn one_stage_budget<const N: usize>(
     let _ = measure(name, || black_box(&mut filter).step(black_box(epoch)).is_ok());
 }
 
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn signal_budgets() {
     let s = &SIGNAL_SAMPLES;
     let i = [&s[0][..], &s[1][..], &s[2][..]];
@@ -558,67 +581,205 @@ fn signal_budgets() {
     }
 }
 
-/// The receiver on the example flight (8 satellites at 45 dB-Hz, 0.5 m triangle, gyro at 100 Hz):
-/// the cold start's window, a plain epoch, a window epoch, a window epoch with the snapshot,
-/// one gyro sample.
-fn receiver_budgets() {
+/// Epochs of the receiver's example flight on the target (3 s: the cold start, the fine
+/// filter's pull-in, then steady fine tracking through the third 1 s integrity window).
+pub const FLIGHT_EPOCHS: u64 = 3000;
+
+/// The receiver's state at the end of the example flight, for the self-check to judge.
+pub struct ReceiverOutcome {
+    /// Which stage produced the final attitude.
+    pub source: gnss_attitude::receiver::AttitudeSource,
+    /// The final attitude `q_rb`.
+    pub attitude: Quaternion,
+    /// The flight's true attitude at the final attitude's epoch.
+    pub truth: Quaternion,
+    /// The final attitude's epoch.
+    pub epoch: u64,
+    /// Refusals of the receiver's calls during the flight (must be 0).
+    pub refusals: u32,
+}
+
+/// What is measured in one epoch of the flight.
+#[derive(Clone, Copy, PartialEq)]
+enum Profile {
+    /// Nothing.
+    None,
+    /// The whole epoch in one region: the observations pushed and the epoch closed.
+    Whole(&'static str),
+    /// Two regions: the 8 observations pushed, then `close_through` of the epoch.
+    Split(&'static str, &'static str),
+}
+
+/// One epoch of the example flight: the aiding every 100 epochs, a gyro increment every 10
+/// (not measured), the observations of 8 satellites x 3 antennas pushed, the epoch closed;
+/// measured as `profile` says. Counts the receiver's refusals.
+fn flight_epoch(
+    r: &mut gnss_attitude::receiver::AttitudeReceiver,
+    flight: &mut gnss_attitude::receiver::example::ExampleFlight,
+    k: u64,
+    profile: Profile,
+    refusals: &mut u32,
+) {
+    if k % 100 == 0 && r.set_aiding(&flight.aiding(k)).is_err() {
+        *refusals += 1;
+    }
+    if k > 0 && k % 10 == 0 && r.push_gyro_increment(&flight.gyro_increment(k / 10 - 1)).is_err() {
+        *refusals += 1;
+    }
+    let obs = flight.observations(k);
+    let push = |r: &mut gnss_attitude::receiver::AttitudeReceiver| {
+        let r = black_box(r);
+        let mut refused = 0u32;
+        for o in black_box(&obs).iter() {
+            refused += u32::from(r.push_observation(black_box(k), o).is_err());
+        }
+        refused
+    };
+    let refused = match profile {
+        Profile::None => {
+            let n = push(r);
+            r.close_through(k);
+            n
+        }
+        Profile::Whole(name) => measure(name, || {
+            let n = push(&mut *r);
+            black_box(&mut *r).close_through(black_box(k));
+            n
+        }),
+        Profile::Split(push_name, close_name) => {
+            let n = measure(push_name, || push(&mut *r));
+            measure(close_name, || black_box(&mut *r).close_through(black_box(k)));
+            n
+        }
+    };
+    *refusals += refused;
+}
+
+/// The receiver on the example flight (8 satellites x 3 antennas at 45 dB-Hz, 0.5 m
+/// triangle, gyro at 100 Hz), [`FLIGHT_EPOCHS`] epochs: the cold start's window, then in
+/// steady fine tracking (after 2 s) the per-stage profile: a plain 1 ms epoch (observations
+/// pushed; epoch closed), a 20 ms block epoch, a 100 ms window epoch (snapshot monitor every
+/// window) and the 1 s window epoch (with the integrity fix), and one gyro sample. Returns the
+/// final attitude against the truth for the self-check.
+// (not inlined: see the other groups)
+#[inline(never)]
+pub fn receiver_budgets() -> Option<ReceiverOutcome> {
     use gnss_attitude::receiver::example::ExampleFlight;
     use gnss_attitude::receiver::AttitudeReceiver;
     let mut flight = ExampleFlight::new(7);
-    let Ok(mut r) = AttitudeReceiver::new(ExampleFlight::config(true)) else { return };
-    hprintln!("receiver: {} B", core::mem::size_of::<AttitudeReceiver>());
-    // one epoch: the observations of 8 satellites pushed, the epoch closed
-    let epoch = |r: &mut AttitudeReceiver, flight: &mut ExampleFlight, k: u64, name: &str| {
-        if k % 100 == 0 {
-            let _ = r.set_aiding(&flight.aiding(k));
-        }
-        if k > 0 && k % 10 == 0 {
-            let _ = r.push_gyro_increment(&flight.gyro_increment(k / 10 - 1));
-        }
-        let obs = flight.observations(k);
-        if name.is_empty() {
-            for o in obs.iter() {
-                let _ = r.push_observation(k, o);
-            }
-            r.close_through(k);
-        } else {
-            let _ = measure(name, || {
-                let r = black_box(&mut *r);
-                for o in black_box(&obs).iter() {
-                    let _ = r.push_observation(k, o);
-                }
-                r.close_through(black_box(k));
-            });
+    let mut r = match AttitudeReceiver::new(ExampleFlight::config(true)) {
+        Ok(r) => r,
+        Err(e) => {
+            hprintln!("receiver: new refused: {:?}", e);
+            return None;
         }
     };
-    for k in 0..99 {
-        epoch(&mut r, &mut flight, k, "");
+    hprintln!("receiver: {} B", core::mem::size_of::<AttitudeReceiver>());
+    let mut refusals = 0u32;
+    // epoch 2050: not a block's end (k + 1 = 2051); 2059: a block's end (2060 = 103 x 20),
+    // not a window's; 2099: the 21st window's end (snapshot monitor); 2999: the 30th window's
+    // end (snapshot monitor and the integrity fix, every 10 windows)
+    for k in 0..FLIGHT_EPOCHS {
+        let profile = match k {
+            99 => Profile::Whole("receiver epoch closing the cold-start window (8 sats: SDs, ambiguity resolution, fine start)"),
+            2050 => Profile::Split(
+                "receiver steady epoch: 8 x push_observation (8 sats x 3 antennas)",
+                "receiver steady epoch: close_through, plain 1 ms epoch (normalize, antenna + bit monitors, block sums)",
+            ),
+            2059 => Profile::Split(
+                "receiver steady block epoch: 8 x push_observation",
+                "receiver steady block epoch: close_through, 20 ms block (epoch + block SDs + gyro-aided fine update)",
+            ),
+            2099 => Profile::Split(
+                "receiver steady window epoch: 8 x push_observation",
+                "receiver steady window epoch: close_through, 100 ms window (block + ambiguity upkeep, snapshot monitor, rigid body)",
+            ),
+            2999 => Profile::Split(
+                "receiver steady 1 s window epoch: 8 x push_observation",
+                "receiver steady 1 s window epoch: close_through, 1 s window (100 ms window + integrity fix)",
+            ),
+            _ => Profile::None,
+        };
+        flight_epoch(&mut r, &mut flight, k, profile, &mut refusals);
     }
-    epoch(&mut r, &mut flight, 99, "receiver epoch closing the cold-start window (8 sats: SDs, ambiguity resolution, fine start)");
-    for k in 100..550 {
-        epoch(&mut r, &mut flight, k, "");
-    }
-    epoch(&mut r, &mut flight, 550, "receiver epoch, 8 sats in (SDs, bit and antenna monitors, fine step N = 6)");
-    for k in 551..599 {
-        epoch(&mut r, &mut flight, k, "");
-    }
-    epoch(&mut r, &mut flight, 599, "receiver epoch closing a window (8 sats: ambiguity upkeep, LS baselines + velocities, rigid-body step)");
-    for k in 600..999 {
-        epoch(&mut r, &mut flight, k, "");
-    }
-    epoch(&mut r, &mut flight, 999, "receiver epoch closing a window with the snapshot monitor (8 sats)");
-    let theta = flight.gyro_increment(100);
+    let att = r.attitude();
+    // the next gyro sample in sequence (the flight pushes sample n at epoch 10 (n + 1))
+    let theta = flight.gyro_increment(FLIGHT_EPOCHS / 10 - 1);
     let _ = measure("receiver gyro sample (propagation, calibrator increment)", || {
         black_box(&mut r).push_gyro_increment(black_box(&theta)).is_ok()
     });
-    let att = r.attitude();
-    hprintln!("receiver: source {:?}, error {} deg", att.source, att.q_rb.angle_to(&flight.attitude(att.epoch)) * 57.29578);
+    Some(ReceiverOutcome {
+        source: att.source,
+        attitude: att.q_rb,
+        truth: flight.attitude(att.epoch),
+        epoch: att.epoch,
+        refusals,
+    })
+}
+
+/// The receiver's block stage alone: the gyro-aided fine filter's prediction over one 20 ms
+/// block and its update with 8 satellites' block phase differences (the example flight's
+/// sky and antennas, phases consistent with the prior attitude), each in a region.
+// (not inlined: see the other groups)
+#[inline(never)]
+fn gyro_aided_budgets() {
+    use gnss_attitude::attitude::gyro_aided::{GyroAidedConfig, GyroAidedFilter, GyroAidedPrior, PhaseDifferenceBlock};
+    use gnss_attitude::receiver::example::{antennas, ExampleFlight};
+    use nalgebra::Matrix2;
+    const WAVELENGTH_M: f32 = 0.190_293_7;
+    let config = GyroAidedConfig {
+        wavelength_m: WAVELENGTH_M,
+        angle_random_walk: 1e-4,
+        bias_random_walk: 1e-5,
+        line_bias_random_walk: 1e-4,
+        gate: Some(GateConfidence::P999),
+    };
+    let [a, b, c] = antennas().map(Vector3::from);
+    let baselines = [b - a, c - a];
+    let q = Quaternion::from_rotation_vector(&Vector3::new(0.3f32, -0.2, 1.1));
+    let prior = GyroAidedPrior {
+        q_rb: q,
+        attitude_covariance: Matrix3::identity() * 1e-6,
+        bias_sigma: 1e-4,
+        line_bias: Vector2::zeros(),
+        line_bias_covariance: Matrix2::identity() * 1e-4,
+    };
+    let m = Quaternion::identity();
+    let Ok(mut f) = GyroAidedFilter::new(config, baselines, &prior, &m) else {
+        hprintln!("gyro-aided budgets: filter refused");
+        return;
+    };
+    let c_rb = q.to_dcm();
+    let k = core::f32::consts::TAU / WAVELENGTH_M;
+    let blocks: [PhaseDifferenceBlock<f32>; 8] = core::array::from_fn(|i| {
+        let los = ExampleFlight::los(i);
+        let s = c_rb.transpose() * los;
+        PhaseDifferenceBlock {
+            id: i as u8 + 1,
+            los,
+            phase_rad: Vector2::new(k * s.dot(&baselines[0]), k * s.dot(&baselines[1])),
+            covariance: Matrix2::new(2e-3, 1e-3, 1e-3, 2e-3),
+        }
+    });
+    let predicted = measure("receiver sub-stage: gyro-aided fine filter predict over one 20 ms block (8 states)", || {
+        black_box(&mut f).predict(black_box(&m), black_box(0.02)).is_ok()
+    });
+    let report = measure("receiver sub-stage: gyro-aided fine filter update, 8 sats x 2 baselines (8 gated 2-D updates, fold-in)", || {
+        black_box(&mut f).update(black_box(&m), black_box(&blocks[..]))
+    });
+    match report {
+        Ok(r) => hprintln!("gyro-aided budgets: predict ok {}, update accepted {} of {}", predicted, r.accepted, r.offered),
+        Err(e) => hprintln!("gyro-aided budgets: update refused: {:?}", e),
+    }
 }
 
 /// The bit-parallel correlator on the i8 correlator's case (3 antennas x 1 satellite, one 1 ms
 /// code period at 2.6 Msps, E/P/L+N on the reference antenna, prompt on the slaves), planes
 /// packed from the same samples before the region: 1- and 2-bit, complex and real IF, 2- and
 /// 3-level carrier.
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn bitwise_budgets() {
     let s = &SIGNAL_SAMPLES;
     let cases = [
@@ -682,6 +843,9 @@ fn bitwise_budgets() {
 /// DMA layouts a flight receiver hands over (sm2iq: two complex samples a byte per antenna;
 /// mc2x3: one byte per instant holding the three antennas' 2-bit real samples; bit1: eight
 /// real samples a byte per antenna).
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn packing_budgets() {
     let s = &SIGNAL_SAMPLES;
     let field = |x: i8| (u8::from(x < 0) << 1) | u8::from(x.unsigned_abs() >= 18);
@@ -746,6 +910,9 @@ fn packing_budgets() {
 /// Navigation (`nav`, f64 soft-float on the M4F for times, ranges and orbits): one subframe
 /// decode, one satellite's position, a single-point fix from 8 satellites (LEO and ground
 /// configurations), the LEO filter and the lines of sight.
+// (not inlined: each group's locals get a frame of their own, so the stack is the largest
+// group's, not the sum of all)
+#[inline(never)]
 fn nav_budgets() {
     use gnss_attitude::nav::bits::DataBit;
     use gnss_attitude::nav::example::{self, EXAMPLE_KLOBUCHAR};

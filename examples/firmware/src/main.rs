@@ -5,16 +5,20 @@
 //!
 //! 1. runs the core's deterministic self-test and compares it with the report `build.rs`
 //!    computed on the host; prints `selfcheck ekf: PASS|FAIL ...`;
-//! 2. measures budgets: each `budget::measure` region is bracketed by the marker instructions
+//! 2. judges outcomes ([`outcome`]): the snapshot solver and the ambiguity resolver on their
+//!    embedded example epoch, the receiver on the example flight (fine attitude within
+//!    [`outcome::RECEIVER_LIMIT_DEG`] of the truth); prints `selfcheck <name>: PASS|FAIL ...`;
+//! 3. measures budgets: each `budget::measure` region is bracketed by the marker instructions
 //!    that QEMU's `insnmark` plugin counts (`mov r8, r8` … `mov r9, r9`), and its stack use is
 //!    measured by painting the free stack before the call;
-//! 3. exits through semihosting with success only if every self-check passed.
+//! 4. exits through semihosting with success only if every self-check passed.
 //!
 //! Semihosting needs a debugger (or QEMU): on a board without one, the `hprintln!` calls halt.
 #![no_std]
 #![no_main]
 
 mod budget;
+mod outcome;
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
@@ -62,7 +66,10 @@ fn main() -> ! {
     all_passed &= signal_self_check();
     all_passed &= bitwise_self_check();
 
-    budget::run_all();
+    all_passed &= outcome::snapshot();
+    all_passed &= outcome::ambiguity();
+    let receiver = budget::run_all();
+    all_passed &= outcome::receiver(receiver.as_ref());
 
     if all_passed {
         hprintln!("selfcheck: all PASS");

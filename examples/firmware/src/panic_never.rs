@@ -4,7 +4,9 @@
 //! optimization (release, fat LTO), the link fails with an undefined symbol
 //! `gnss_attitude_core_can_panic`. The inputs are opaque (`black_box`), so the optimizer cannot
 //! prove a path dead by knowing the data; only the code's own checks can remove it.
-//! Build: `cargo build --release --bin panic-never`; it is linked, never run.
+//! Build: `cargo build --release --bin panic-never`; it is linked, never run. The feature
+//! `panic-control` adds a deliberately reachable panic: the link must then fail (`.ci/run`
+//! checks both).
 #![no_std]
 #![no_main]
 
@@ -74,6 +76,8 @@ fn main() -> ! {
     receiver();
     sample_receiver();
     navigation();
+    #[cfg(feature = "panic-control")]
+    negative_control();
     loop {
         cortex_m::asm::nop();
     }
@@ -459,14 +463,14 @@ fn bitwise(cfg: &CorrelatorConfig, prn: Prn) {
     }
 }
 
-/// The attitude receiver's entry points with opaque inputs.
+/// The attitude receiver's entry points with opaque inputs (the configuration too).
 #[inline(never)]
 fn receiver() {
     use gnss_attitude::attitude::one_stage::{PromptIq, SatelliteObservation};
     use gnss_attitude::receiver::{AttitudeReceiver, GyroConfig, ReceiverConfig, SatelliteAiding};
     let antennas: [[f32; 3]; 3] = black_box([[0.29, 0.0, -0.05], [-0.14, 0.25, -0.05], [-0.14, -0.25, -0.05]]);
-    let mut config = ReceiverConfig::gps_l1(antennas, Some(GyroConfig::mems(black_box(0.01), black_box(Some(1e-5)))));
-    config.window_epochs = black_box(100);
+    let gyro = black_box(Some(GyroConfig::mems(black_box(0.01), black_box(Some(1e-5)))));
+    let config: ReceiverConfig = black_box(ReceiverConfig::gps_l1(antennas, gyro));
     let Ok(mut r) = AttitudeReceiver::new(config) else { return };
     let aiding: [SatelliteAiding; 12] = core::array::from_fn(|i| SatelliteAiding {
         prn: black_box(i as u8 + 1),
@@ -474,47 +478,66 @@ fn receiver() {
         los: black_box([0.0, 0.6, -0.8]),
         los_rate: black_box([1e-4, 0.0, 0.0]),
     });
-    let _ = black_box(r.set_aiding(black_box(&aiding)));
+    let aiding: &[SatelliteAiding] = black_box(&aiding[..]);
+    let _ = black_box(r.set_aiding(aiding));
     for k in 0..black_box(3u64) {
+        let epoch = black_box(k);
         let _ = black_box(r.push_gyro_increment(&black_box([1e-4, 2e-4, -1e-4])));
         let _ = black_box(r.push_gyro_pulses(black_box([3, -2, 10])));
         for i in 0..black_box(12u8) {
-            let obs = SatelliteObservation {
-                id: black_box(i + 1),
+            let obs: SatelliteObservation<f32> = black_box(SatelliteObservation {
+                id: black_box(i.wrapping_add(1)),
                 los: black_box([0.0, 0.0, 1.0]),
                 prompt: PromptIq { i: black_box([30.0, 20.0, -10.0]), q: black_box([1.0, 15.0, 8.0]) },
                 noise_var: black_box(1.0),
                 cn0_dbhz: black_box(45.0),
-            };
-            let _ = black_box(r.push_observation(black_box(k), &obs));
+            });
+            let _ = black_box(r.push_observation(epoch, &obs));
         }
-        r.close_through(black_box(k));
+        r.close_through(black_box(epoch));
     }
+    receiver_outputs(&mut r);
+}
+
+/// Every output of the receiver.
+#[inline(never)]
+fn receiver_outputs(r: &mut gnss_attitude::receiver::AttitudeReceiver) {
+    let _ = black_box(r.config());
     let _ = black_box(r.attitude());
     let _ = black_box(r.fine_estimate());
     let _ = black_box(r.snapshot_estimate());
     let _ = black_box(r.rigid_body_estimate());
+    let _ = black_box(r.gyro_bias());
+    let _ = black_box(r.gyro_bias_sigma());
     let _ = black_box(r.gyro_calibration());
+    let _ = black_box(r.last_integrity_check());
     let _ = black_box(r.health());
+    let _ = black_box(r.events_dropped());
+    let _ = black_box(r.epoch());
     while let Some(e) = r.pop_event() {
+        let _ = black_box(e.epoch());
         let _ = black_box(e);
     }
 }
 
-/// The receiver from raw samples: search, start, push samples, release.
+/// The receiver from raw samples at the size host-sim flies (12 channels, 2048-point
+/// acquisition): search, start, push samples, release; every configuration opaque.
 #[inline(never)]
 fn sample_receiver() {
-    use gnss_attitude::receiver::{ReceiverConfig, SampleFrontConfig, SampleReceiver};
+    use gnss_attitude::receiver::{GyroConfig, ReceiverConfig, SampleFrontConfig, SampleReceiver};
     let antennas: [[f32; 3]; 3] = black_box([[0.29, 0.0, -0.05], [-0.14, 0.25, -0.05], [-0.14, -0.25, -0.05]]);
-    let config = ReceiverConfig::gps_l1(antennas, None);
-    let mut front = SampleFrontConfig::leo_complex(black_box(2.6e6));
-    front.acquisition.noncoherent_ms = black_box(1);
-    let Ok(mut rx) = SampleReceiver::<4, 1024>::new(config, front) else { return };
+    let gyro = black_box(Some(GyroConfig::mems(black_box(0.01), black_box(None))));
+    let config: ReceiverConfig = black_box(ReceiverConfig::gps_l1(antennas, gyro));
+    let front: SampleFrontConfig = black_box(SampleFrontConfig::leo_complex(black_box(2.6e6)));
+    let Ok(mut rx) = SampleReceiver::<12, 2048>::new(config, front) else { return };
     let Some(prn) = Prn::new(black_box(9)) else { return };
-    let si: [i8; 256] = black_box([1; 256]);
-    let sq: [i8; 256] = black_box([-1; 256]);
-    let _ = black_box(rx.search(prn, &si, Some(&sq), black_box(0)));
-    let acq = SearchResult {
+    // the slices opaque, their lengths too
+    let (si, sq) = ([1i8; 2600], [-1i8; 2600]);
+    let si: &[i8] = black_box(&si[..]);
+    let sq: &[i8] = black_box(&sq[..]);
+    let q = if black_box(true) { Some(sq) } else { None };
+    let _ = black_box(rx.search(prn, si, q, black_box(0)));
+    let acq: SearchResult = black_box(SearchResult {
         prn,
         detected: true,
         metric: black_box(5.0),
@@ -522,15 +545,20 @@ fn sample_receiver() {
         doppler_hz: black_box(100.0),
         code_phase_chips: black_box(10.0),
         first_sample: black_box(0),
-    };
+    });
     let _ = black_box(rx.start(&acq));
-    if let Ok(block) = SampleBlock::complex(black_box(0), [&si[..], &si[..], &si[..]], [&sq[..], &sq[..], &sq[..]]) {
-        let _ = black_box(rx.push_samples(&block));
+    let _ = black_box(rx.tracks(prn));
+    for first in [black_box(0u64), black_box(2600)] {
+        if let Ok(block) = SampleBlock::complex(first, [si, si, si], [sq, sq, sq]) {
+            let _ = black_box(rx.push_samples(black_box(&block)));
+        }
     }
     for c in rx.channels() {
         let _ = black_box(c);
     }
     let _ = black_box(rx.attitude());
+    let _ = black_box(rx.receiver().attitude());
+    receiver_outputs(rx.receiver_mut());
     let _ = black_box(rx.release(prn));
 }
 
@@ -575,6 +603,16 @@ fn navigation() {
         }
     }
     let _ = black_box(solve(&obs, &store, None, &t, None, &black_box(SolverConfig::leo())));
+}
+
+/// The negative control (feature `panic-control`): a deliberately reachable panic, a slice
+/// indexed with an opaque index. With it this binary must fail to link; `.ci/run` checks
+/// that it does, so a proof that links is known to be able to fail.
+#[cfg(feature = "panic-control")]
+#[inline(never)]
+fn negative_control() {
+    let data: [u8; 4] = black_box([1, 2, 3, 4]);
+    let _ = black_box(data[black_box(7usize)]);
 }
 
 #[panic_handler]

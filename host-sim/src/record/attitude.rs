@@ -156,6 +156,11 @@ pub struct WindowAttitude {
     pub ypr_sigma_deg: Option<[f64; 3]>,
     /// RMS of the range-difference residuals, mm.
     pub residual_rms_mm: Option<f64>,
+    /// Line biases of antennas 1 and 2 estimated in this window (without `--line-bias`),
+    /// cycles in `[−½, ½)`.
+    pub line_bias_cycles: Option<[f64; 2]>,
+    /// Their standard deviations, cycles.
+    pub line_bias_sigma_cycles: Option<[f64; 2]>,
 }
 
 /// The attitude part of the `track` report.
@@ -175,8 +180,27 @@ pub struct AttitudeReport {
     pub ypr_std_deg: Option<[f64; 3]>,
     /// Mean formal standard deviation of yaw, pitch, roll, degrees.
     pub ypr_sigma_mean_deg: Option<[f64; 3]>,
+    /// Line biases of antennas 1 and 2 (given with `--line-bias`, or the mean of the fixed
+    /// windows' estimates), cycles.
+    pub line_bias_cycles: Option<[f64; 2]>,
+    /// Whether they were estimated (no `--line-bias`).
+    pub line_bias_estimated: bool,
     /// Every window.
     pub per_window: Vec<WindowAttitude>,
+}
+
+/// The circular mean of the windows' line-bias estimates, cycles in `[−½, ½)`.
+fn mean_bias(windows: &[WindowAttitude]) -> Option<[f64; 2]> {
+    let est: Vec<[f64; 2]> = windows.iter().filter_map(|w| w.line_bias_cycles).collect();
+    (!est.is_empty()).then(|| {
+        std::array::from_fn(|i| {
+            let tau = std::f64::consts::TAU;
+            let (s, c) = est.iter().fold((0.0, 0.0), |(s, c), b| {
+                (s + (tau * b[i]).sin(), c + (tau * b[i]).cos())
+            });
+            s.atan2(c) / tau
+        })
+    })
 }
 
 /// The attitude stage.
@@ -272,7 +296,8 @@ impl AttitudeSolver {
             }
             let phase: [f64; 2] = std::array::from_fn(|i| {
                 let [re, im] = sums.sum[i];
-                im.atan2(re) / std::f64::consts::TAU - self.setup.line_bias_cycles[i]
+                im.atan2(re) / std::f64::consts::TAU
+                    - self.setup.line_bias_cycles.map_or(0.0, |b| b[i])
             });
             let code = sums.code_mean_chips.map(|c| c * CHIP_M);
             let n = f64::from(sums.n);
@@ -294,6 +319,8 @@ impl AttitudeSolver {
             ypr_deg: None,
             ypr_sigma_deg: None,
             residual_rms_mm: None,
+            line_bias_cycles: None,
+            line_bias_sigma_cycles: None,
         };
         out.satellites.sort_unstable();
         if rows.len() < 4 {
@@ -325,7 +352,16 @@ impl AttitudeSolver {
         cfg.ratio_nodes = cfg.max_nodes;
         let resolver = AmbiguityResolver::new(self.snapshot, cfg)
             .map_err(|e| anyhow::anyhow!("ambiguity resolver: {e}"))?;
-        match resolver.resolve(&obs) {
+        let resolved = match self.setup.line_bias_cycles {
+            Some(_) => resolver.resolve(&obs),
+            None => resolver.resolve_with_line_biases(&obs).map(|b| {
+                let wrap = |c: f32| f64::from(c) - f64::from(c).round();
+                out.line_bias_cycles = Some(b.line_bias_cycles.map(wrap));
+                out.line_bias_sigma_cycles = Some(b.line_bias_sigma_cycles.map(f64::from));
+                b.fix
+            }),
+        };
+        match resolved {
             Ok(fix) => {
                 let e = fix.solution.euler;
                 out.ratio = Some(f64::from(fix.ratio));
@@ -366,13 +402,20 @@ impl AttitudeSolver {
             })
         });
         AttitudeReport {
-            method: "per-window single differences -> constrained integer ambiguity resolution (MC-LAMBDA objective, ratio 3, chi2 99.9 %) -> snapshot ML attitude (core, f32)".into(),
+            method: if self.setup.line_bias_cycles.is_some() {
+                "per-window single differences -> constrained integer ambiguity resolution (MC-LAMBDA objective, ratio 3, chi2 99.9 %) -> snapshot ML attitude (core, f32)"
+            } else {
+                "per-window double differences (line biases unknown) -> constrained integer ambiguity resolution (MC-LAMBDA objective, ratio 3, chi2 99.9 %) -> line biases and snapshot ML attitude (core, f32)"
+            }
+            .into(),
             window_s: self.setup.window_s,
             windows: windows.len(),
             fixed: fixed.len(),
             ypr_mean_deg: m,
             ypr_std_deg: std,
             ypr_sigma_mean_deg: mean(&sig),
+            line_bias_cycles: self.setup.line_bias_cycles.or_else(|| mean_bias(&windows)),
+            line_bias_estimated: self.setup.line_bias_cycles.is_none(),
             per_window: windows,
         }
     }

@@ -8,8 +8,9 @@ use anyhow::{bail, ensure, Result};
 pub struct AttitudeSetup {
     /// Baselines of antennas 1 and 2 from antenna 0, body frame, m.
     pub baselines_body_m: [[f64; 3]; 2],
-    /// Line biases of antennas 1 and 2 relative to antenna 0, cycles.
-    pub line_bias_cycles: [f64; 2],
+    /// Line biases of antennas 1 and 2 relative to antenna 0, cycles (`None`: unknown, the
+    /// resolver estimates them with the integers from double differences).
+    pub line_bias_cycles: Option<[f64; 2]>,
     /// Sky: (PRN, azimuth from north towards east, elevation), degrees.
     pub sky: Vec<(u8, f64, f64)>,
     /// Window, s.

@@ -9,6 +9,7 @@
 pub mod bound;
 pub mod fast_path;
 pub mod files;
+pub mod limit;
 pub mod metrics;
 pub mod nmea;
 pub mod run;
@@ -123,8 +124,27 @@ crate::metrics! {
         #[metric(unit = "deg")] pub max_err_deg: [f64; 3],
         /// Fraction of the flight with an attitude.
         #[metric(unit = "")] pub availability: f64,
-        /// RMS of the bound √(2Δf (J⁻¹)_aa) over the converged stretch.
-        #[metric(unit = "deg")] pub bound_deg: [f64; 3],
+        /// RMS of the physical limit over the converged stretch: the posterior Cramér–Rao
+        /// bound of a gyro-aided carrier-phase estimator with this gyro and unknown line
+        /// biases ([`limit`]).
+        #[metric(unit = "deg")] pub limit_deg: [f64; 3],
+        /// RMS of the 1 Hz loop's noise √(2Δf (J⁻¹)_aa) over the converged stretch (the
+        /// paper-003 loop's design noise; formerly `bound_deg`).
+        #[metric(unit = "deg")] pub loop_noise_deg: [f64; 3],
+        /// `rms_err_deg / limit_deg` per axis.
+        #[metric(unit = "")] pub rms_over_limit: [f64; 3],
+        /// `rms_err_deg / loop_noise_deg` per axis.
+        #[metric(unit = "")] pub rms_over_loop_noise: [f64; 3],
+        /// Mean NEES of the receiver's attitude after convergence (3 when its σ is right).
+        #[metric(unit = "")] pub nees_mean: f64,
+        /// Fraction of converged records with the NEES inside χ²₃'s two-sided 95 % band.
+        #[metric(unit = "")] pub nees_in_band: f64,
+        /// RMS line-bias error (B − A, C − A) after convergence.
+        #[metric(unit = "deg")] pub line_bias_error_deg: [f64; 2],
+        /// Line-bias error at the end of the flight.
+        #[metric(unit = "deg")] pub line_bias_final_error_deg: [f64; 2],
+        /// When both line-bias errors came within 0.05 rad to stay (10 s; null: never).
+        #[metric(unit = "s")] pub line_bias_converged_s: Option<f64>,
         /// Each fault's detection and recovery.
         #[metric(nested)] pub faults: Vec<FaultOutcome>,
         /// Time the fine filter first locked.
@@ -133,13 +153,17 @@ crate::metrics! {
         #[metric(wall = "s")] pub wall_time_s: f64,
         /// RMS error while the sample-level chain fed the receiver, after convergence.
         #[metric(unit = "deg")] pub rms_err_samples_deg: [f64; 3],
-        /// The bound over the converged sample-level stretch (null: it ended before
+        /// The loop noise over the converged sample-level stretch (null: it ended before
         /// convergence).
-        #[metric(unit = "deg")] pub bound_samples_deg: [f64; 3],
+        #[metric(unit = "deg")] pub loop_noise_samples_deg: [f64; 3],
+        /// The limit over the converged sample-level stretch.
+        #[metric(unit = "deg")] pub limit_samples_deg: [f64; 3],
         /// RMS error on the fast path.
         #[metric(unit = "deg")] pub rms_err_fast_path_deg: [f64; 3],
-        /// The bound over the fast-path stretch.
-        #[metric(unit = "deg")] pub bound_fast_path_deg: [f64; 3],
+        /// The loop noise over the fast-path stretch.
+        #[metric(unit = "deg")] pub loop_noise_fast_path_deg: [f64; 3],
+        /// The limit over the fast-path stretch.
+        #[metric(unit = "deg")] pub limit_fast_path_deg: [f64; 3],
         /// What the sample-level stretch did.
         #[metric(flatten)] #[serde(flatten)] pub sample_level: Option<SampleLevelMetrics>,
     }
@@ -154,6 +178,13 @@ crate::metrics! {
         #[metric(unit = "")] pub sample_level_searches: usize,
         /// Satellites the sample-level acquisition found (a channel each).
         #[metric(unit = "")] pub sample_level_found: usize,
+        /// Searches of PRNs the receiver predicted (almanac, orbit, its own attitude) that no
+        /// antenna received.
+        #[metric(unit = "")] pub sample_level_searches_absent: usize,
+        /// Detections of a PRN the reference antenna did not receive.
+        #[metric(unit = "")] pub sample_level_false_alarms: usize,
+        /// Searches of a received PRN that found nothing.
+        #[metric(unit = "")] pub sample_level_missed: usize,
         /// Sample-level tracking epochs that arrived after their filter epoch.
         #[metric(unit = "")] pub sample_level_late: usize,
         /// Observations the sample-level chain delivered.
@@ -187,24 +218,42 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
 }
 
 fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Metrics {
-    let [(rs, bs, _), (rf, bf, _)] = m.by_path;
+    let [on_samples, fast] = m.by_path;
+    let ratio = |a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>| {
+        let r = a.component_div(b);
+        [r.x, r.y, r.z]
+    };
+    let lb = &m.line_bias;
     Metrics {
         ttff_s: m.ttff_s,
         rms_err_deg: deg(&m.receiver.rms),
         max_err_deg: deg(&m.receiver.max),
         availability: m.availability,
-        bound_deg: deg(&m.bound),
+        limit_deg: deg(&m.limit),
+        loop_noise_deg: deg(&m.loop_noise),
+        rms_over_limit: ratio(&m.receiver.rms, &m.limit),
+        rms_over_loop_noise: ratio(&m.receiver.rms, &m.loop_noise),
+        nees_mean: m.consistency.nees_mean,
+        nees_in_band: m.consistency.nees_in_band,
+        line_bias_error_deg: lb.rms_rad.map(f64::to_degrees),
+        line_bias_final_error_deg: lb.final_rad.map(f64::to_degrees),
+        line_bias_converged_s: lb.converged_s,
         faults: m.faults.clone(),
         fine_lock_s: m.fine_lock_s,
         wall_time_s: wall_s,
-        rms_err_samples_deg: deg(&rs),
-        bound_samples_deg: deg(&bs),
-        rms_err_fast_path_deg: deg(&rf),
-        bound_fast_path_deg: deg(&bf),
+        rms_err_samples_deg: deg(&on_samples.rms),
+        loop_noise_samples_deg: deg(&on_samples.loop_noise),
+        limit_samples_deg: deg(&on_samples.limit),
+        rms_err_fast_path_deg: deg(&fast.rms),
+        loop_noise_fast_path_deg: deg(&fast.loop_noise),
+        limit_fast_path_deg: deg(&fast.limit),
         sample_level: record.sample_stats.as_ref().map(|st| SampleLevelMetrics {
             sample_level_s: record.sample_level_s,
             sample_level_searches: st.searches,
             sample_level_found: st.detections,
+            sample_level_searches_absent: st.searches_absent,
+            sample_level_false_alarms: st.false_alarms,
+            sample_level_missed: st.missed,
             sample_level_late: st.late,
             sample_level_observations: st.observations,
             sample_level_wall_s: record.wall_s.0,
@@ -215,26 +264,28 @@ fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Met
 
 /// What the sample-level stretch did, and the receiver's error on each input path.
 fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightMetrics) {
-    let [(rs, bs, ns), (rf, bf, nf)] = m.by_path;
     let Some(st) = &record.sample_stats else {
         return;
     };
-    let line = |name: &str, r: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>, n: usize| {
-        let (r, b) = (deg(r), deg(b));
+    let line = |name: &str, p: &metrics::PathStats| {
+        let (r, l) = (deg(&p.rms), deg(&p.limit));
         format!(
-            "  {name:<28} RMS {:.4}/{:.4}/{:.4} deg vs bound {:.4}/{:.4}/{:.4} ({n} samples)",
-            r[0], r[1], r[2], b[0], b[1], b[2]
+            "  {name:<28} RMS {:.4}/{:.4}/{:.4} deg vs limit {:.4}/{:.4}/{:.4} ({} samples)",
+            r[0], r[1], r[2], l[0], l[1], l[2], p.count
         )
     };
     let mut lines = vec![
         format!(
-            "sample-level chain for the first {:.0} s: {} satellites in the scene (|Doppler| ≤ {:.1} kHz, |rate| ≤ {:.0} Hz/s), {} searches ±50 kHz, {} found (a channel each); {} observations, {} late; wall {:.1} s (synthesis {:.1}, acquisition {:.1}, tracking {:.1}), fast path {:.1} s",
+            "sample-level chain for the first {:.0} s: {} satellites in the scene (|Doppler| ≤ {:.1} kHz, |rate| ≤ {:.0} Hz/s), {} searches ±50 kHz of the PRNs the almanac predicts ({} of PRNs not received), {} found (a channel each), {} false alarms, {} missed; {} observations, {} late; wall {:.1} s (synthesis {:.1}, acquisition {:.1}, tracking {:.1}), fast path {:.1} s",
             record.sample_level_s,
             st.satellites,
             st.max_doppler_hz / 1e3,
             st.max_doppler_rate_hz_s,
             st.searches,
+            st.searches_absent,
             st.detections,
+            st.false_alarms,
+            st.missed,
             st.observations,
             st.late,
             record.wall_s.0,
@@ -243,14 +294,14 @@ fn sample_level_summary(o: &mut Outcome, record: &run::FlightRecord, m: &FlightM
             st.tracking_s,
             record.wall_s.1
         ),
-        line("converged, from samples", &rs, &bs, ns),
-        line("converged, fast path", &rf, &bf, nf),
+        line("converged, from samples", &m.by_path[0]),
+        line("converged, fast path", &m.by_path[1]),
     ];
-    // after the bound line
+    // after the limit lines
     let pos = o
         .summary
         .iter()
-        .position(|l| l.starts_with("bound"))
+        .position(|l| l.starts_with("line biases"))
         .map_or(o.summary.len(), |p| p + 1);
     for (i, l) in lines.drain(..).enumerate() {
         o.summary.insert(pos + i, l);
@@ -285,15 +336,24 @@ fn summary(m: &FlightMetrics, wall_s: f64) -> Vec<String> {
         o.push(row(s));
     }
     o.push(row(&m.receiver));
-    let b = deg(&m.bound);
+    let (l, b) = (deg(&m.limit), deg(&m.loop_noise));
+    let r = &m.receiver.rms;
     o.push(format!(
-        "bound (√(2Δf (J⁻¹)_aa), same geometry and C/N0): {:.4}/{:.4}/{:.4} deg; RMS/bound {:.2}/{:.2}/{:.2}",
-        b[0],
-        b[1],
-        b[2],
-        m.receiver.rms.x / m.bound.x,
-        m.receiver.rms.y / m.bound.y,
-        m.receiver.rms.z / m.bound.z
+        "limit (posterior CRB: this gyro, unknown line biases, same geometry and C/N0): {:.4}/{:.4}/{:.4} deg; RMS/limit {:.2}/{:.2}/{:.2}",
+        l[0], l[1], l[2], r.x / m.limit.x, r.y / m.limit.y, r.z / m.limit.z
+    ));
+    o.push(format!(
+        "loop noise (the 1 Hz loop's, √(2Δf (J⁻¹)_aa)): {:.4}/{:.4}/{:.4} deg; RMS/loop noise {:.2}/{:.2}/{:.2}; NEES mean {:.2} (3 if consistent), {:.0} % in its 95 % band",
+        b[0], b[1], b[2], r.x / m.loop_noise.x, r.y / m.loop_noise.y, r.z / m.loop_noise.z,
+        m.consistency.nees_mean, 100.0 * m.consistency.nees_in_band
+    ));
+    let lb = &m.line_bias;
+    o.push(format!(
+        "line biases (B−A, C−A), unknown at power-up: RMS error {:.2}/{:.2} deg after convergence, {:.2}/{:.2} deg at the end, within {:.2} rad from {} s",
+        lb.rms_rad[0].to_degrees(), lb.rms_rad[1].to_degrees(),
+        lb.final_rad[0].to_degrees(), lb.final_rad[1].to_degrees(),
+        metrics::LINE_BIAS_CONVERGED_RAD,
+        lb.converged_s.map_or("never".into(), |t| format!("{t:.1}"))
     ));
     o.push(format!(
         "satellites tracked: mean {:.1}, min {}, max {}",

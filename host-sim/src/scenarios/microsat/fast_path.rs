@@ -10,12 +10,18 @@
 //! `signal` scenario measures the chain's inter-antenna phase noise within 2–8 % of this
 //! model's).
 //!
+//! The receiver measures the noise and C/N0 itself: each epoch also yields a noise tap per
+//! antenna (`σ` per component) for the core's noise floor, and the channel's C/N0 comes from the
+//! core's estimator on the reference prompt and noise tap (0.1 s, then 1 s windows).
+//!
 //! The channel's life is emulated: a satellite rising above the reference antenna's mask is
 //! searched at the next whole second and delivers epochs after the chain's refinement and
 //! pull-in (256 ms + 300 ms); one that sets keeps delivering noise for the 100 ms the lock
 //! detector needs to notice, then stops.
 
 use gnss_attitude::attitude::one_stage::{PromptIq, SatelliteObservation};
+use gnss_attitude::signal::correlator::Iq;
+use gnss_attitude::tracking::cn0::PowerWindow;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -82,7 +88,23 @@ pub struct EmulatedChannel {
     pub transients: Vec<PhaseTransient>,
     cn0_estimate: f64,
     cn0_updated: f64,
+    /// The core's C/N0 statistics of the reference antenna's prompt and noise taps.
+    cn0_window: PowerWindow,
     flipped: bool,
+}
+
+/// The first C/N0 window after a start, s (then [`CN0_WINDOW_S`]).
+const CN0_FIRST_WINDOW_S: f64 = 0.1;
+/// The C/N0 window, s.
+const CN0_WINDOW_S: f64 = 1.0;
+
+/// One complex Gaussian correlator output of `σ` per component, rounded to counts.
+fn noise_iq(rng: &mut ChaCha8Rng, sigma: f64) -> Iq {
+    let (i, q): (f64, f64) = (StandardNormal.sample(rng), StandardNormal.sample(rng));
+    Iq {
+        i: (sigma * i).round() as i32,
+        q: (sigma * q).round() as i32,
+    }
 }
 
 impl EmulatedChannel {
@@ -97,6 +119,7 @@ impl EmulatedChannel {
             transients: Vec::new(),
             cn0_estimate: 0.0,
             cn0_updated: f64::NEG_INFINITY,
+            cn0_window: PowerWindow::default(),
             flipped: false,
         }
     }
@@ -142,7 +165,8 @@ impl EmulatedChannel {
         t
     }
 
-    /// The C/N0 the channel reports (its 1 s estimate), dB-Hz.
+    /// The C/N0 the channel reports (measured by the core's estimator over 1 s windows, the
+    /// first one 0.1 s), dB-Hz.
     pub fn reported_cn0_dbhz(&self) -> f64 {
         self.cn0_estimate
     }
@@ -155,8 +179,10 @@ impl EmulatedChannel {
         )
     }
 
-    /// The observation of epoch `k` (centre time `t`): `sat` the truth, `psi` the geometric
-    /// phases of A, B, C (rad), `line_bias` (rad).
+    /// The observation of epoch `k` (centre time `t`) and the epoch's noise taps of A, B, C:
+    /// `sat` the truth, `psi` the geometric phases of A, B, C (rad), `line_bias` (rad). The
+    /// observation's `noise_var` is left to the caller, who measures it from the noise taps
+    /// (the core's noise floor) as the sample-level chain does.
     pub fn observe(
         &mut self,
         k: u64,
@@ -165,7 +191,7 @@ impl EmulatedChannel {
         psi: [f64; 3],
         line_bias: [f64; 3],
         rng: &mut ChaCha8Rng,
-    ) -> SatelliteObservation<f32> {
+    ) -> (SatelliteObservation<f32>, [Iq; 3]) {
         // data bit: edges every 20 epochs at the channel's offset
         let mut d_start = self.bit;
         if (k + 20 - self.bit_offset) % 20 == 0 {
@@ -182,12 +208,6 @@ impl EmulatedChannel {
                 d = d_start * sign * (f - (1.0 - f));
                 self.flipped = true;
             }
-        }
-        // channel's C/N0 estimate: the reference antenna's, refreshed every second (1 s windows)
-        if t - self.cn0_updated >= 1.0 {
-            let n: f64 = StandardNormal.sample(rng);
-            self.cn0_estimate = sat.cn0_dbhz[0] + 0.3 * n;
-            self.cn0_updated = t;
         }
         let cn0_ref = 10f64.powf(sat.cn0_dbhz[0] / 10.0);
         let pll_sigma = (PLL_BANDWIDTH_HZ / cn0_ref).sqrt();
@@ -214,12 +234,38 @@ impl EmulatedChannel {
             prompt.i[p] = (amplitude * d * theta.cos() + NOISE_SIGMA * ni) as f32;
             prompt.q[p] = (amplitude * d * theta.sin() + NOISE_SIGMA * nq) as f32;
         }
-        SatelliteObservation {
+        let noise = [(); 3].map(|_| noise_iq(rng, NOISE_SIGMA));
+        self.measure_cn0(&prompt, &noise[0], t);
+        let observation = SatelliteObservation {
             id: self.prn,
             los: [0.0, 0.0, 1.0],
             prompt,
-            noise_var: (NOISE_SIGMA * NOISE_SIGMA) as f32,
+            noise_var: f32::NAN,
             cn0_dbhz: self.cn0_estimate.clamp(0.0, 90.0) as f32,
+        };
+        (observation, noise)
+    }
+
+    /// The channel's C/N0: the core's estimator on the reference prompt and noise tap.
+    fn measure_cn0(&mut self, prompt: &PromptIq<f32>, noise: &Iq, t: f64) {
+        let p = Iq {
+            i: prompt.i[0].round() as i32,
+            q: prompt.q[0].round() as i32,
+        };
+        self.cn0_window.add(&p, noise);
+        let window = if self.cn0_estimate > 0.0 {
+            CN0_WINDOW_S
+        } else {
+            CN0_FIRST_WINDOW_S
+        };
+        if self.cn0_updated == f64::NEG_INFINITY {
+            self.cn0_updated = t;
+        }
+        if t - self.cn0_updated >= window - 0.5 * EPOCH_S {
+            if let Some(e) = self.cn0_window.finish(EPOCH_S as f32) {
+                self.cn0_estimate = f64::from(e.cn0_dbhz);
+            }
+            self.cn0_updated = t;
         }
     }
 }

@@ -74,9 +74,14 @@ fn write_attitude_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
         "fine_err_x_deg",
         "fine_err_y_deg",
         "fine_err_z_deg",
-        "bound_x_deg",
-        "bound_y_deg",
-        "bound_z_deg",
+        "loop_noise_x_deg",
+        "loop_noise_y_deg",
+        "loop_noise_z_deg",
+        "limit_x_deg",
+        "limit_y_deg",
+        "limit_z_deg",
+        "line_bias_err_b_deg",
+        "line_bias_err_c_deg",
         "tracked",
         "used",
         "fixed",
@@ -94,7 +99,8 @@ fn write_attitude_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
             let e = deg(&s.error);
             let g = deg(&s.sigma);
             let f = deg(&s.fine_error);
-            let b = deg(&s.bound);
+            let b = deg(&s.loop_noise);
+            let l = deg(&s.limit);
             vec![
                 s.t,
                 source_code(s.source),
@@ -110,6 +116,11 @@ fn write_attitude_csv(dir: &Path, record: &FlightRecord) -> Result<PathBuf> {
                 b[0],
                 b[1],
                 b[2],
+                l[0],
+                l[1],
+                l[2],
+                s.line_bias_error[0].to_degrees(),
+                s.line_bias_error[1].to_degrees(),
                 s.tracked as f64,
                 s.used as f64,
                 s.fixed as f64,
@@ -207,8 +218,8 @@ fn plot_error(
             Series::line("receiver − truth", pts(&|s| s.error[a].to_degrees()), 0),
             Series::bound("±3σ (receiver)", pts(&|s| 3.0 * s.sigma[a].to_degrees()), 1),
             Series::bound("", pts(&|s| -3.0 * s.sigma[a].to_degrees()), 1),
-            Series::bound("±3× bound", pts(&|s| 3.0 * s.bound[a].to_degrees()), 2),
-            Series::bound("", pts(&|s| -3.0 * s.bound[a].to_degrees()), 2),
+            Series::bound("±3× limit", pts(&|s| 3.0 * s.limit[a].to_degrees()), 2),
+            Series::bound("", pts(&|s| -3.0 * s.limit[a].to_degrees()), 2),
         ];
         if record.sample_level_s > 0.0 {
             let lim = series
@@ -440,11 +451,11 @@ fn markdown(record: &FlightRecord, m: &FlightMetrics, title: &str, summary: &[St
             st.satellites
         );
     }
-    let b = deg(&m.bound);
+    let (b, l) = (deg(&m.loop_noise), deg(&m.limit));
     let _ = writeln!(
         s,
-        "\nBound for the same geometry and C/N0, √(2Δf (J⁻¹)_aa): {:.4} / {:.4} / {:.4} deg.\n",
-        b[0], b[1], b[2]
+        "\nPhysical limit (posterior Cramér–Rao bound with the gyro's error model and unknown line biases): {:.4} / {:.4} / {:.4} deg; the 1 Hz loop's noise √(2Δf (J⁻¹)_aa): {:.4} / {:.4} / {:.4} deg.\n",
+        l[0], l[1], l[2], b[0], b[1], b[2]
     );
     let _ = writeln!(s, "## Faults\n");
     let _ = writeln!(

@@ -60,8 +60,14 @@ pub struct FlightMetrics {
     pub receiver: StageStats,
     /// Per stage.
     pub stages: Vec<StageStats>,
-    /// RMS of the bound over the converged stretch, per body axis, rad.
-    pub bound: Vector3<f64>,
+    /// RMS of the 1 Hz loop's noise over the converged stretch, per body axis, rad.
+    pub loop_noise: Vector3<f64>,
+    /// RMS of the physical limit over the converged stretch, per body axis, rad.
+    pub limit: Vector3<f64>,
+    /// The receiver's reported σ against its error after convergence.
+    pub consistency: Consistency,
+    /// The line biases' estimation.
+    pub line_bias: LineBiasStats,
     /// Fraction of the flight with an attitude (any source).
     pub availability: f64,
     /// Satellites tracked: mean, min, max (after the first fix).
@@ -72,10 +78,53 @@ pub struct FlightMetrics {
     pub gyro_bias_error: Vector3<f64>,
     /// True gyro bias at the end, °/h.
     pub gyro_bias_truth: Vector3<f64>,
-    /// The converged receiver attitude split by input path: (RMS error, RMS bound, samples)
-    /// while the sample-level chain fed the receiver, and on the fast path after it.
-    pub by_path: [(Vector3<f64>, Vector3<f64>, usize); 2],
+    /// The converged receiver attitude split by input path: while the sample-level chain fed
+    /// the receiver, and on the fast path after it.
+    pub by_path: [PathStats; 2],
 }
+
+/// The converged receiver attitude on one input path.
+#[derive(Clone, Copy, Debug)]
+pub struct PathStats {
+    /// RMS error per body axis, rad.
+    pub rms: Vector3<f64>,
+    /// RMS of the loop noise, rad.
+    pub loop_noise: Vector3<f64>,
+    /// RMS of the physical limit, rad.
+    pub limit: Vector3<f64>,
+    /// Records.
+    pub count: usize,
+}
+
+/// Whether the receiver's σ tells its error: the normalized estimation error squared
+/// `NEES = Σ_a (e_a/σ_a)²` (3 degrees of freedom, per-axis σ) over the converged records.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Consistency {
+    /// Mean NEES (3 for a consistent σ).
+    pub nees_mean: f64,
+    /// Fraction of records inside the two-sided 95 % band of χ²₃.
+    pub nees_in_band: f64,
+}
+
+/// The line biases (B − A, C − A) against the truth.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LineBiasStats {
+    /// RMS error after convergence, rad.
+    pub rms_rad: [f64; 2],
+    /// Error at the end, rad.
+    pub final_rad: [f64; 2],
+    /// First time from which both errors stay within [`LINE_BIAS_CONVERGED_RAD`] for
+    /// [`LINE_BIAS_HOLD_S`], s (`None`: never).
+    pub converged_s: Option<f64>,
+}
+
+/// The two-sided 95 % band of χ² with 3 degrees of freedom.
+const CHI2_3_BAND: (f64, f64) = (0.2158, 9.348);
+/// A line-bias error below this counts as converged, rad (its attitude effect on the 0.5 m
+/// triangle is ~λ/(2π·0.5 m) ≈ 0.06 of it: 3e-3 rad of attitude).
+pub const LINE_BIAS_CONVERGED_RAD: f64 = 0.05;
+/// How long the line-bias error must stay converged, s.
+pub const LINE_BIAS_HOLD_S: f64 = 10.0;
 
 fn rms_max<'a>(
     errors: impl Iterator<Item = &'a Vector3<f64>>,
@@ -235,19 +284,74 @@ fn tracked_counts(after_fix: &[&Sample]) -> (f64, usize, usize) {
     )
 }
 
-/// The converged receiver attitude on one input path: (RMS error, RMS bound, samples).
-fn by_path(
-    converged: &[&Sample],
-    sample_level_s: f64,
-    on_samples: bool,
-) -> (Vector3<f64>, Vector3<f64>, usize) {
+/// The converged receiver attitude on one input path.
+fn by_path(converged: &[&Sample], sample_level_s: f64, on_samples: bool) -> PathStats {
     let part: Vec<&&Sample> = converged
         .iter()
         .filter(|s| has_attitude(s) && (s.t < sample_level_s) == on_samples)
         .collect();
-    let (rms, _, n) = rms_max(part.iter().map(|s| &s.error));
-    let (b, _, _) = rms_max(part.iter().map(|s| &s.bound));
-    (rms, b, n)
+    let (rms, _, count) = rms_max(part.iter().map(|s| &s.error));
+    PathStats {
+        rms,
+        loop_noise: rms_max(part.iter().map(|s| &s.loop_noise)).0,
+        limit: rms_max(part.iter().map(|s| &s.limit)).0,
+        count,
+    }
+}
+
+/// NEES statistics of the converged records with an attitude.
+fn consistency(converged: &[&Sample]) -> Consistency {
+    let nees: Vec<f64> = converged
+        .iter()
+        .filter(|s| has_attitude(s))
+        .map(|s| {
+            (0..3)
+                .map(|a| (s.error[a] / s.sigma[a]).powi(2))
+                .sum::<f64>()
+        })
+        .filter(|v| v.is_finite())
+        .collect();
+    let n = nees.len().max(1) as f64;
+    Consistency {
+        nees_mean: nees.iter().sum::<f64>() / n,
+        nees_in_band: nees
+            .iter()
+            .filter(|v| (CHI2_3_BAND.0..=CHI2_3_BAND.1).contains(*v))
+            .count() as f64
+            / n,
+    }
+}
+
+/// The line biases' errors: RMS after `from`, at the end, and when they converged.
+fn line_bias_stats(samples: &[Sample], from: f64) -> LineBiasStats {
+    let within = |s: &Sample| {
+        s.line_bias_error
+            .iter()
+            .all(|e| e.abs() <= LINE_BIAS_CONVERGED_RAD)
+    };
+    let mut start: Option<f64> = None;
+    let mut converged_s = None;
+    for s in samples {
+        match (within(s), start) {
+            (true, None) => start = Some(s.t),
+            (false, _) => start = None,
+            (true, Some(t0)) if s.t - t0 >= LINE_BIAS_HOLD_S => {
+                converged_s = Some(t0);
+                break;
+            }
+            _ => {}
+        }
+    }
+    let after: Vec<&Sample> = samples.iter().filter(|s| s.t >= from).collect();
+    let rms = [0, 1].map(|p| {
+        let v: Vec<f64> = after.iter().map(|s| s.line_bias_error[p]).collect();
+        (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt()
+    });
+    LineBiasStats {
+        rms_rad: rms,
+        final_rad: samples.last().map_or([f64::NAN; 2], |s| s.line_bias_error),
+        converged_s,
+    }
 }
 
 /// The metrics of one flight of `duration` seconds.
@@ -264,7 +368,13 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
         .map_or(f64::NAN, |(t, _)| *t);
     let from = fine_lock + SETTLE_S;
     let converged: Vec<&Sample> = samples.iter().filter(|s| s.t >= from).collect();
-    let (bound, _, _) = rms_max(converged.iter().map(|s| &s.bound));
+    let with_attitude: Vec<&Sample> = converged
+        .iter()
+        .copied()
+        .filter(|s| has_attitude(s))
+        .collect();
+    let (loop_noise, _, _) = rms_max(with_attitude.iter().map(|s| &s.loop_noise));
+    let (limit, _, _) = rms_max(with_attitude.iter().map(|s| &s.limit));
     let after_fix: Vec<&Sample> = samples.iter().filter(|s| s.t >= ttff).collect();
     let mut receiver = receiver_stats(samples, ttff, from);
     receiver.satellites = mean_over(&after_fix, &|s| Some(s.tracked as f64));
@@ -279,7 +389,10 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
         availability: receiver.availability,
         receiver,
         stages: stages(record, ttff, fine_lock, from, duration),
-        bound,
+        loop_noise,
+        limit,
+        consistency: consistency(&converged),
+        line_bias: line_bias_stats(samples, from),
         tracked: tracked_counts(&after_fix),
         faults: Vec::new(),
         gyro_bias_error: (record.gyro_bias.1 - record.gyro_bias.0) * DEG_PER_H,
@@ -359,6 +472,19 @@ struct Events<'a> {
 }
 
 impl Events<'_> {
+    /// The largest |error| (°) of the records in `[from, to]` with an attitude, and whether
+    /// every one of them was inside 3σ on every axis.
+    fn worst_against_sigma(&self, from: f64, to: f64) -> (f64, bool) {
+        let inside = |s: &Sample| (0..3).all(|a| s.error[a].abs() <= 3.0 * s.sigma[a]);
+        self.record
+            .samples
+            .iter()
+            .filter(|s| s.t >= from && s.t <= to && has_attitude(s))
+            .fold((0.0, true), |(w, ok), s| {
+                (w.max(s.error.amax().to_degrees()), ok && inside(s))
+            })
+    }
+
     /// The time of the first event in `[from, to]` that satisfies `pred`.
     fn find(&self, from: f64, to: f64, pred: &dyn Fn(&ReceiverEvent) -> bool) -> Option<f64> {
         self.record
@@ -502,7 +628,14 @@ fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutco
                     "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
                     t - ts
                 ),
-                _ => "not detected".into(),
+                _ => {
+                    let (worst, inside) = ev.worst_against_sigma(ts, ts + WINDOW.slip_found);
+                    format!(
+                        "not detected; the block measurements are 2π-periodic, so a whole-cycle slip leaves nothing to detect: largest error within {:.0} s {worst:.4}°, {}",
+                        WINDOW.slip_found,
+                        if inside { "inside 3σ throughout" } else { "outside 3σ at times" }
+                    )
+                }
             }
         ),
     }

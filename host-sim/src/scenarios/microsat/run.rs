@@ -10,15 +10,17 @@ use gnss_attitude::receiver::{
     AttitudeReceiver, AttitudeSource, GyroConfig, ReceiverConfig, ReceiverEvent, SatelliteAiding,
     StageEstimate, MAX_SATELLITES,
 };
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix5, Vector3};
 
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelState, EmulatedChannel, PhaseTransient, EPOCH_S};
 use super::sample_level::{locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats};
-use super::world::{Blockage, MotionKind, SatTruth, World};
+use super::world::{Blockage, LineBiasTruth, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
 use crate::truth::sky::GpsView;
+use gnss_attitude::receiver::{AdapterConfig, NoiseFloor};
+use gnss_attitude::signal::correlator::{EpochCorrelations, Iq, Taps};
 use gnss_attitude::signal::Prn;
 
 /// Gyro sample interval, s.
@@ -79,8 +81,9 @@ pub struct Sample {
     pub fine_error: Vector3<f64>,
     /// Whether the fine filter is locked.
     pub fine_locked: bool,
-    /// The bound per body axis, rad (NaN when fewer than 3 satellites).
-    pub bound: Vector3<f64>,
+    /// The 1 Hz loop's noise `√(2Δf (J⁻¹)_aa)` per body axis ([`super::bound`]), rad (NaN
+    /// when fewer than 3 satellites).
+    pub loop_noise: Vector3<f64>,
     /// Satellites delivering observations.
     pub tracked: usize,
     /// Satellites used by the fine filter.
@@ -93,6 +96,15 @@ pub struct Sample {
     pub blocked: [bool; 3],
     /// Gyro bias estimate minus truth, rad/s.
     pub bias_error: Vector3<f64>,
+    /// Line-bias estimate minus truth (B − A, C − A), wrapped to `(−π, π]`, rad.
+    pub line_bias_error: [f64; 2],
+    /// The receiver's 1σ of its line biases, rad.
+    pub line_bias_sigma: [f64; 2],
+    /// Carrier-phase information rate of the usable satellites on the attitude (body axes)
+    /// and the two line biases, 1/(rad² s) ([`super::limit::information_rate`]).
+    pub information: Matrix5<f64>,
+    /// The physical limit per body axis at this record ([`super::limit`]), rad.
+    pub limit: Vector3<f64>,
 }
 
 /// A stage estimate's error at its own epoch.
@@ -223,6 +235,8 @@ const SKY_EVERY_EPOCHS: u64 = 1000;
 const SAMPLE_MARGIN_S: f64 = 0.5;
 /// Seed salt of the gyro's noise.
 const GYRO_SEED_SALT: u64 = 0x6779;
+/// Seed salt of the RF chains' power-up line biases.
+const LINE_BIAS_SEED_SALT: u64 = 0x6c62;
 
 /// Runs one flight: the sample-level chain for the first [`FlightConfig::sample_level_s`],
 /// then the fast path from the channels it hands over.
@@ -263,6 +277,8 @@ struct Flight<'a> {
     views: (Vec<GpsView>, Vec<GpsView>),
     /// Whether each satellite was above the reference antenna's mask.
     was_visible: BTreeMap<u8, bool>,
+    /// The fast path's noise floor: the core's, from the emulated channels' noise taps.
+    noise: NoiseFloor,
     started: std::time::Instant,
 }
 
@@ -285,6 +301,7 @@ impl<'a> Flight<'a> {
             config.detumble_rates,
         );
         world.blockages = config.faults.blockages.clone();
+        world.line_bias = LineBiasTruth::power_up(config.seed ^ LINE_BIAS_SEED_SALT);
         let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
         let rx = Box::new(
             Front::new(rcfg, SampleLevel::front_config())
@@ -323,6 +340,7 @@ impl<'a> Flight<'a> {
             per_block: (AIDING_S / EPOCH_S).round() as u64,
             views: (Vec::new(), Vec::new()),
             was_visible: BTreeMap::new(),
+            noise: NoiseFloor::new(AdapterConfig::default().noise_time_constant),
             started: std::time::Instant::now(),
         })
     }
@@ -505,12 +523,12 @@ impl<'a> Flight<'a> {
     fn observe(&mut self, e: &EpochTruth) -> Result<usize> {
         let mut tracked = 0;
         if let (Some(sl), true) = (self.sample_level.as_mut(), e.in_samples) {
-            tracked += sl.epoch(e.k, &mut self.rx)?.observations as usize;
+            tracked += sl.epoch(e.k, &mut self.rx, &self.world)?.observations as usize;
         }
         if e.in_samples {
             return Ok(tracked);
         }
-        let line_bias = self.world.line_bias_rad;
+        let line_bias = self.world.line_bias.at(e.tc);
         for s in &e.truths {
             let Some(ch) = self.channels.get_mut(&s.view.prn) else {
                 continue;
@@ -519,7 +537,13 @@ impl<'a> Flight<'a> {
                 continue;
             }
             let psi = [0, 1, 2].map(|p| self.world.geometric_phase(p, &s.view.los, &e.c_ib));
-            let obs = ch.observe(e.k, e.tc, s, psi, line_bias, &mut self.rng);
+            let (mut obs, noise) = ch.observe(e.k, e.tc, s, psi, line_bias, &mut self.rng);
+            self.noise.add(&noise_taps(noise));
+            // the noise variance the receiver measures, as its adapter does from samples
+            let Some(var) = self.noise.variance(AdapterConfig::default().noise_min_taps) else {
+                continue;
+            };
+            obs.noise_var = var[0];
             match self.rx.receiver_mut().push_observation(e.k, &obs) {
                 Ok(()) => tracked += 1,
                 Err(gnss_attitude::receiver::ReceiverError::NoAiding) => {}
@@ -579,6 +603,7 @@ impl<'a> Flight<'a> {
     /// The wall times, the sample-level statistics, the gyro calibration at the end.
     fn finish(mut self) -> FlightRecord {
         let mut record = std::mem::take(&mut self.record);
+        self.attach_limit(&mut record);
         record.wall_s.1 = self.started.elapsed().as_secs_f64() - record.wall_s.0;
         if let Some(sl) = &self.sample_level {
             record.sample_stats = Some(sl.stats().clone());
@@ -591,6 +616,30 @@ impl<'a> Flight<'a> {
             Vector3::new(f64::from(est[0]), f64::from(est[1]), f64::from(est[2])),
         );
         record
+    }
+}
+
+impl Flight<'_> {
+    /// The physical limit along the records: the truth's gyro error model and body rates, the
+    /// information of the satellites all antennas saw.
+    fn attach_limit(&self, record: &mut FlightRecord) {
+        let deg_h = std::f64::consts::PI / 180.0 / 3600.0;
+        let prior = super::limit::Prior {
+            attitude_rad: 1.0,
+            line_bias_rad: std::f64::consts::PI,
+            line_bias_drift_rad_s: super::world::LINE_BIAS_DRIFT_MAX_RAD_S / 3f64.sqrt(),
+            scale_misalignment: 2e-3,
+            gyro_bias_rad_s: 50.0 * deg_h,
+        };
+        let motion = &self.world.motion;
+        let records = record
+            .samples
+            .iter()
+            .map(|s| (s.t, motion.omega_b(s.t), s.information));
+        let sigma = super::limit::along(records, &prior, &GyroErrors::mems());
+        for (s, l) in record.samples.iter_mut().zip(sigma) {
+            s.limit = l;
+        }
     }
 }
 
@@ -670,7 +719,7 @@ fn record_sample(
         ),
         None => (nan3(), false),
     };
-    let bound = bound_now(
+    let loop_noise = bound_now(
         world,
         truths,
         t,
@@ -699,7 +748,7 @@ fn record_sample(
         },
         fine_error,
         fine_locked,
-        bound,
+        loop_noise,
         tracked,
         used: usize::from(h.satellites_used),
         fixed: usize::from(h.satellites_fixed),
@@ -709,6 +758,10 @@ fn record_sample(
             .count(),
         blocked: h.antenna_blocked,
         bias_error,
+        line_bias_error: line_bias_error(&h.line_bias_rad, &world.line_bias.differences(t)),
+        line_bias_sigma: h.line_bias_sigma_rad.map(f64::from),
+        information: information_now(world, truths, t),
+        limit: nan3(),
     });
     record_stages(record, receiver, world);
 }
@@ -724,6 +777,51 @@ fn bound_now(world: &World, truths: &[SatTruth], t: f64, bandwidth_hz: f64) -> V
         .collect();
     let positions = world.antennas.map(|a| a.position);
     bound_rad(&positions, &usable, bandwidth_hz).unwrap_or_else(nan3)
+}
+
+/// One epoch's correlations carrying only the noise taps of A, B, C (what the noise floor
+/// reads).
+fn noise_taps(noise: [Iq; 3]) -> EpochCorrelations<3> {
+    EpochCorrelations {
+        taps: noise.map(|n| Taps {
+            noise: n,
+            ..Taps::default()
+        }),
+        samples: 0,
+        first_sample: 0,
+        code_phase_at_first: 0,
+        carrier_phase_at_first: 0,
+        complete: true,
+    }
+}
+
+/// The carrier-phase information rate at `t` of the satellites at least two antennas receive.
+fn information_now(world: &World, truths: &[SatTruth], t: f64) -> Matrix5<f64> {
+    let c_ib = world.c_ib(t);
+    let usable: Vec<super::limit::Satellite> = truths
+        .iter()
+        .map(|s| super::limit::Satellite {
+            los_body: c_ib.transpose() * s.view.los,
+            cn0_dbhz: s.cn0_dbhz[0],
+            visible: s.visible,
+        })
+        .collect();
+    let positions = world.antennas.map(|a| a.position);
+    super::limit::information_rate(&positions, &usable)
+}
+
+/// `estimate − truth` per slave chain, wrapped to `(−π, π]` (a bias is defined modulo a cycle
+/// together with the integers), rad.
+fn line_bias_error(estimate: &[f32; 2], truth: &[f64; 2]) -> [f64; 2] {
+    use std::f64::consts::{PI, TAU};
+    [0, 1].map(|p| {
+        let e = (f64::from(estimate[p]) - truth[p]).rem_euclid(TAU);
+        if e > PI {
+            e - TAU
+        } else {
+            e
+        }
+    })
 }
 
 /// The snapshot and rigid-body estimates, each once per epoch of its own.

@@ -18,7 +18,10 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{anyhow, Result};
-use gnss_attitude::receiver::{SampleFrontConfig, SampleReceiver, SampleReport, MAX_SATELLITES};
+use gnss_attitude::geometry::Quaternion;
+use gnss_attitude::receiver::{
+    AttitudeSource, SampleFrontConfig, SampleReceiver, SampleReport, MAX_SATELLITES,
+};
 use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -26,7 +29,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::fast_path::EPOCH_S;
-use super::world::World;
+use super::world::{World, MASK_RAD};
 use crate::chain::{samples, ChainParams, ANTENNAS};
 use crate::synth::quantize::Planar;
 use crate::synth::scene::{mix, L1_WAVELENGTH};
@@ -40,6 +43,11 @@ pub const SAMPLES_PER_EPOCH: u32 = 2600;
 pub const BLOCK: usize = 260_000;
 /// Step of the satellite tracks, s.
 pub const TRACK_STEP_S: f64 = 0.01;
+/// How far below an antenna's mask a satellite predicted with the receiver's own attitude is
+/// still searched, rad (5°: the attitude is known to better than a degree once it exists).
+pub const SEARCH_MARGIN_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
+/// A PRN whose search failed is searched again after this long, s.
+pub const RETRY_AFTER_S: f64 = 5.0;
 /// A channel without lock for this long is closed (its slot searched again), s.
 pub const DROP_AFTER_S: f64 = 2.0;
 
@@ -52,6 +60,13 @@ pub struct SampleStats {
     pub searches: usize,
     /// Searches that found their satellite (each starts a channel).
     pub detections: usize,
+    /// Searches of PRNs no antenna received at the time (predicted up, but below the antennas'
+    /// horizon, blocked, or not in the sky).
+    pub searches_absent: usize,
+    /// Detections of a PRN the reference antenna did not receive: false alarms.
+    pub false_alarms: usize,
+    /// Searches of a PRN the reference antenna received that found nothing.
+    pub missed: usize,
     /// Observations handed to the receiver.
     pub observations: usize,
     /// Tracking epochs that arrived after their receiver epoch was handed out (should be 0).
@@ -77,6 +92,8 @@ pub struct SampleLevel {
     /// The current block: its first sample and its decoded samples.
     block: Option<(u64, Planar)>,
     stats: SampleStats,
+    /// When each PRN's last search failed, s: searched again [`RETRY_AFTER_S`] later.
+    failed_at: BTreeMap<u8, f64>,
 }
 
 /// One satellite at one track point: PRN, range (m), range rate (m/s), `μ·r_P` (m) and C/N0
@@ -188,7 +205,8 @@ pub fn chain_params(
         satellites,
         antennas_b: world.antennas.iter().map(|a| a.position).collect(),
         line_bias_cycles: world
-            .line_bias_rad
+            .line_bias
+            .at(0.5 * duration_s)
             .iter()
             .map(|b| b / std::f64::consts::TAU)
             .collect(),
@@ -236,6 +254,7 @@ impl SampleLevel {
             prns,
             block: None,
             stats,
+            failed_at: BTreeMap::new(),
         }
     }
 
@@ -268,25 +287,46 @@ impl SampleLevel {
         Some((te / EPOCH_S).round() as u64)
     }
 
-    /// Satellites the almanac and orbit predict above the reference antenna's mask at `t`
-    /// without a channel in `rx`.
-    fn to_search(&self, t: f64, rx: &Front) -> Vec<u8> {
-        self.params
-            .scene
-            .satellites
-            .iter()
-            .filter(|s| {
-                s.track.as_ref().is_some_and(|tr| tr.cn0(0, t).is_finite())
-                    && Prn::new(s.prn).is_some_and(|p| !rx.tracks(p))
+    /// What the receiver decides to search at `t`, from what a flight computer has: the
+    /// almanac and the orbit (`world.sky`) say which healthy satellites are above the Earth's
+    /// limb; with an attitude of its own (`rx`'s receiver), only those predicted above some
+    /// antenna's horizon less [`SEARCH_MARGIN_RAD`]; cold, all of them. PRNs with a channel
+    /// are not searched again.
+    fn to_search(t: f64, rx: &Front, world: &World) -> Vec<u8> {
+        let attitude = rx.receiver().attitude();
+        let c_ib = (attitude.source != AttitudeSource::None).then(|| {
+            let q = attitude.q_rb;
+            Quaternion::new(
+                f64::from(q.w),
+                f64::from(q.x),
+                f64::from(q.y),
+                f64::from(q.z),
+            )
+            .to_dcm()
+        });
+        world
+            .sky
+            .views(t)
+            .into_iter()
+            .filter(|v| !v.occulted)
+            .filter(|v| {
+                c_ib.is_none_or(|c| {
+                    let s_b = c.transpose() * v.los;
+                    world
+                        .antennas
+                        .iter()
+                        .any(|a| s_b.dot(&a.boresight).asin() >= MASK_RAD - SEARCH_MARGIN_RAD)
+                })
             })
-            .map(|s| s.prn)
+            .map(|v| v.prn)
+            .filter(|&p| Prn::new(p).is_some_and(|p| !rx.tracks(p)))
             .collect()
     }
 
     /// Receiver epoch `k` from samples: synthesizes the next block when `k` starts one,
     /// searches the predicted satellites without a channel on whole seconds, and pushes the
     /// epoch's samples through `rx`'s channels into its receiver.
-    pub fn epoch(&mut self, k: u64, rx: &mut Front) -> Result<SampleReport> {
+    pub fn epoch(&mut self, k: u64, rx: &mut Front, world: &World) -> Result<SampleReport> {
         let per = u64::from(SAMPLES_PER_EPOCH);
         let first = k * per;
         let stale = match &self.block {
@@ -306,7 +346,11 @@ impl SampleLevel {
         let t = first as f64 / SAMPLE_RATE_HZ;
         if k % 1000 == 0 {
             let needed = self.params.acquisition.samples_needed();
-            let prns = self.to_search(t, rx);
+            let failed = &self.failed_at;
+            let prns: Vec<u8> = Self::to_search(t, rx, world)
+                .into_iter()
+                .filter(|p| failed.get(p).is_none_or(|&f| t - f >= RETRY_AFTER_S - 1e-9))
+                .collect();
             let started = std::time::Instant::now();
             for p in prns {
                 let prn = Prn::new(p).ok_or_else(|| anyhow!("PRN {p}"))?;
@@ -320,9 +364,11 @@ impl SampleLevel {
                 let r = rx
                     .search(prn, i, Some(q), first)
                     .map_err(|e| anyhow!("search PRN {p}: {e}"))?;
-                self.stats.searches += 1;
+                count_search(&self.params, &mut self.stats, p, t, r.detected);
                 if r.detected {
-                    self.stats.detections += 1;
+                    self.failed_at.remove(&p);
+                } else {
+                    self.failed_at.insert(p, t);
                 }
             }
             self.stats.acquisition_s += started.elapsed().as_secs_f64();
@@ -348,6 +394,21 @@ impl SampleLevel {
         self.stats.late += report.late as usize;
         Ok(report)
     }
+}
+
+/// Counts one search's outcome against the truth: whether the reference antenna received
+/// `prn` at `t` in the scene of `params`.
+fn count_search(params: &ChainParams, stats: &mut SampleStats, prn: u8, t: f64, detected: bool) {
+    let received = params
+        .scene
+        .satellites
+        .iter()
+        .any(|s| s.prn == prn && s.track.as_ref().is_some_and(|tr| tr.cn0(0, t).is_finite()));
+    stats.searches += 1;
+    stats.detections += usize::from(detected);
+    stats.searches_absent += usize::from(!received);
+    stats.false_alarms += usize::from(detected && !received);
+    stats.missed += usize::from(!detected && received);
 }
 
 /// The core's receiver from samples as host-sim runs it: 12 channels, 2048-point acquisition.

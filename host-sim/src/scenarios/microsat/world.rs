@@ -84,10 +84,61 @@ pub struct World {
     pub motion: Motion,
     /// The antennas A, B, C.
     pub antennas: [Antenna; 3],
-    /// Line biases of A, B, C (carrier phase added by each RF chain), rad.
-    pub line_bias_rad: [f64; 3],
+    /// Line biases of A, B, C (carrier phase added by each RF chain): new at each power-up,
+    /// drifting with temperature.
+    pub line_bias: LineBiasTruth,
     /// Blockages.
     pub blockages: Vec<Blockage>,
+}
+
+/// Largest line-bias drift rate of one RF chain, rad/s (a few degrees per hour: 5°/h).
+pub const LINE_BIAS_DRIFT_MAX_RAD_S: f64 = 5.0 * std::f64::consts::PI / 180.0 / 3600.0;
+
+/// The carrier phase each RF chain adds (rad): unknown at switch-on, then drifting
+/// linearly like a slow temperature change, `β_p(t) = β_p(0) + β̇_p t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineBiasTruth {
+    /// Bias of A, B, C at power-up, rad.
+    pub at_power_up_rad: [f64; 3],
+    /// Drift of A, B, C, rad/s.
+    pub drift_rad_s: [f64; 3],
+}
+
+impl Default for LineBiasTruth {
+    /// The fixed biases of the examples (no drift).
+    fn default() -> Self {
+        Self {
+            at_power_up_rad: [0.0, 0.7, -1.2],
+            drift_rad_s: [0.0; 3],
+        }
+    }
+}
+
+impl LineBiasTruth {
+    /// A power-up of the RF chains: each bias uniform in `[−π, π)` and each drift uniform in
+    /// `±`[`LINE_BIAS_DRIFT_MAX_RAD_S`], drawn from `seed`.
+    pub fn power_up(seed: u64) -> Self {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let pi = std::f64::consts::PI;
+        Self {
+            at_power_up_rad: [(); 3].map(|_| rng.random_range(-pi..pi)),
+            drift_rad_s: [(); 3]
+                .map(|_| rng.random_range(-LINE_BIAS_DRIFT_MAX_RAD_S..LINE_BIAS_DRIFT_MAX_RAD_S)),
+        }
+    }
+
+    /// The biases of A, B, C at `t`, rad.
+    pub fn at(&self, t: f64) -> [f64; 3] {
+        [0, 1, 2].map(|p| self.at_power_up_rad[p] + self.drift_rad_s[p] * t)
+    }
+
+    /// What the receiver estimates: the slave chains' biases minus the reference's (B − A,
+    /// C − A) at `t`, rad.
+    pub fn differences(&self, t: f64) -> [f64; 2] {
+        let b = self.at(t);
+        [b[1] - b[0], b[2] - b[0]]
+    }
 }
 
 /// The equilateral triangle of side [`TRIANGLE_SIDE_M`] on the zenith face (`z = −0.05 m`,
@@ -146,7 +197,7 @@ impl World {
             },
             motion,
             antennas: zenith_triangle(),
-            line_bias_rad: [0.0, 0.7, -1.2],
+            line_bias: LineBiasTruth::default(),
             blockages: Vec::new(),
         }
     }
