@@ -22,7 +22,7 @@
 //! # The test ([`cross_correlation_source`])
 //! A victim (signal power `S_v`) is explained by the others when
 //! `S_v ≤ margin · X_v` with `X_v = Σ_j X_j + 2 Σ_{j<j' coherent} √(X_j X_j')`, `X_j = S_j ·
-//! (max|R_jv|² − 1/1023)⁺` over the others stronger than the victim (`S_j > S_v`), the maximum
+//! (max|R_jv|² − ⅔/1023)⁺` over the others stronger than the victim (`S_j > S_v`), the maximum
 //! taken over a small grid of lags and Doppler offsets around the nominal ones (the estimates'
 //! errors). The victim's power has its background removed, and every background (the mean
 //! cell of a search, a channel's noise tap) already holds the mean of `|R_jv|²` over code
@@ -46,10 +46,12 @@ const GRID_DOPPLER_FRACTIONS: [f32; 3] = [-1.0, 0.0, 1.0];
 /// Grid points of one cross-correlation maximum.
 pub const GRID_POINTS: usize = GRID_LAG_FRACTIONS.len() * GRID_DOPPLER_FRACTIONS.len();
 
-/// The mean of `|R_ab|²` over code lags, `1/1023` (the Gold codes' cross-correlation energy
-/// spread over the code period): the part of a stronger signal's cross-correlation every
-/// background estimate already holds.
-pub const MEAN_FRACTION: f32 = 1.0 / CA_CODE_LENGTH as f32;
+/// The mean of `|R_ab|²` over code lags, `(2/3)/1023`: the Gold codes' cross-correlation
+/// energy spread over the code period (`1/1023` at whole-chip lags), times the `2/3` of
+/// rectangular chips at fractional lags (a replica chip overlaps two chips of the other code
+/// with fractions `u`, `1 − u`; the mean of `(1 − u)² + u²`). The part of a stronger signal's
+/// cross-correlation every background estimate already holds.
+pub const MEAN_FRACTION: f32 = 2.0 / (3.0 * CA_CODE_LENGTH as f32);
 
 /// Most other signals one test considers (satellites in view of one antenna).
 pub const MAX_OTHERS: usize = 32;
@@ -368,7 +370,8 @@ mod tests {
         for victim in probes.iter().filter(|p| p.power < 10f32.powf(4.7)) {
             let v = cross_correlation_source(victim, &probes, &test);
             assert!(!v.explained, "PRN {}: {v:?}", victim.prn.number());
-            assert!(victim.power > 4.0 * v.predicted_power, "{v:?}");
+            // room over the margin (3 dB) for a measured power's straddle losses
+            assert!(victim.power > 3.0 * v.predicted_power, "{v:?}");
         }
     }
 }
