@@ -26,7 +26,7 @@
 //! (rows 0, 1, 0 / 0, 0, 1 for A, B, C) and `Π = I − 11ᵀ/n` over the `n` receiving antennas,
 //! the projection that removes the unknown common phase and data bit. The bound follows the
 //! information along the run: a Kalman covariance recursion in steps of at most
-//! [`MAX_STEP_S`], the information entering as unit-variance measurements through its square
+//! `MAX_STEP_S`, the information entering as unit-variance measurements through its square
 //! root (numerically the stable form).
 //!
 //! `limit_deg` is the RMS of `√P_ee` per body axis over the converged stretch.
