@@ -263,15 +263,13 @@ fn insert<const M: usize, const N: usize, T: Real>(
     c: Candidate<M, N, T>,
 ) {
     let position = best.iter().position(|b| c.cost < b.cost);
-    match position {
-        Some(p) => {
-            if best.is_full() {
-                best.pop();
-            }
-            let _ = best.insert(p, c);
-        }
-        None => {
-            let _ = best.push(c);
-        }
+    // behind the kept ones: appended while there is room, else no rival at all
+    let Some(p) = position.or((!best.is_full()).then_some(best.len())) else {
+        return;
+    };
+    if best.is_full() {
+        best.pop();
     }
+    // a slot is free and `p ≤ len`: the insertion cannot fail
+    let _ = best.insert(p, c);
 }

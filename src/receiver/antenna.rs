@@ -45,7 +45,10 @@ impl AntennaMonitor {
             };
             if next != *b {
                 *b = next;
-                let _ = changes.push((i, next));
+                // one entry per antenna: the vector holds them all
+                if changes.push((i, next)).is_err() {
+                    break;
+                }
             }
         }
         changes

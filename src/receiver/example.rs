@@ -110,12 +110,16 @@ impl ExampleFlight {
         let mut v = heapless::Vec::new();
         for (i, (prn, _, _)) in SKY.iter().enumerate() {
             let los = Self::los(i);
-            let _ = v.push(SatelliteAiding {
+            let aiding = SatelliteAiding {
                 prn: *prn,
                 epoch,
                 los: [los.x, los.y, los.z],
                 los_rate: [0.0; 3],
-            });
+            };
+            // the sky holds at most MAX_SATELLITES satellites: a full vector ends the list
+            if v.push(aiding).is_err() {
+                break;
+            }
         }
         v
     }
