@@ -61,6 +61,19 @@ struct Level<T> {
     after: T,
 }
 
+impl<T: Real> Level<T> {
+    /// A level not yet entered.
+    fn blank() -> Self {
+        Self {
+            cond: T::zero(),
+            z: T::zero(),
+            step: T::one(),
+            before: T::zero(),
+            after: T::zero(),
+        }
+    }
+}
+
 impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
     /// Runs the search. `partial(i, z_i)` returns a lower bound of the constraint term from
     /// baseline `i`'s integers alone; `full(z)` returns the constraint term of a full candidate
@@ -74,14 +87,7 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
         if n == 0 || n > N || M == 0 {
             return Err(SearchFailure::Input(SnapshotError::Numerical));
         }
-        let blank = Level {
-            cond: T::zero(),
-            z: T::zero(),
-            step: T::one(),
-            before: T::zero(),
-            after: T::zero(),
-        };
-        let mut lv = [[blank; N]; M];
+        let mut lv = [[Level::blank(); N]; M];
         let mut zbar = [[T::zero(); N]; M];
         let mut zint = [[T::zero(); N]; M];
         // largest constraint lower bound over baselines ≤ i
@@ -108,11 +114,9 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
                 return Err(SearchFailure::Input(SnapshotError::Numerical));
             };
             *zk = level.z;
-            let prior = if i == 0 {
-                T::zero()
-            } else {
-                lb.get(i - 1).copied().unwrap_or(T::zero())
-            };
+            // the constraint bound of the baselines before this one
+            let prior = i.checked_sub(1).and_then(|p| lb.get(p)).copied();
+            let prior = prior.unwrap_or(T::zero());
             let here = level.after;
             if here + prior <= out.bound {
                 if k > 0 {
@@ -121,28 +125,24 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
                     continue;
                 }
                 // baseline i complete
-                if i + 1 == M {
-                    out.evaluated += 1;
-                    if let Some(extra) = full(&zint) {
-                        let cost = here + extra;
-                        if cost.is_finite() {
-                            insert(&mut out.best, Candidate { z: zint, cost });
-                            out.bound = self.shrink(&out.best);
-                        }
-                    }
+                let descend = if i + 1 == M {
+                    self.evaluate(&zint, here, &mut full, &mut out);
+                    false
                 } else {
                     let bound_i = zint.get(i).map(|z| partial(i, z)).unwrap_or(T::zero());
                     let merged = if bound_i > prior { bound_i } else { prior };
-                    if here + merged <= out.bound {
-                        if let Some(slot) = lb.get_mut(i) {
-                            *slot = merged;
-                        }
-                        g += 1;
-                        self.enter(g, &mut lv, &mut zbar, &zint);
-                        continue;
+                    let open = here + merged <= out.bound;
+                    if let (true, Some(slot)) = (open, lb.get_mut(i)) {
+                        *slot = merged;
                     }
+                    open
+                };
+                if descend {
+                    g += 1;
+                    self.enter(g, &mut lv, &mut zbar, &zint);
+                } else {
+                    self.advance(g, &mut lv);
                 }
-                self.advance(g, &mut lv);
                 continue;
             }
             // this level is exhausted (Schnorr–Euchner order): back up
@@ -156,6 +156,25 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
             }
         }
         Ok(out)
+    }
+
+    /// A full candidate `z` with the search cost `here`: its constraint term from `full`,
+    /// then kept among the best (which shrinks the bound) when finite.
+    fn evaluate(
+        &self,
+        z: &[[T; N]; M],
+        here: T,
+        full: &mut impl FnMut(&[[T; N]; M]) -> Option<T>,
+        out: &mut SearchOutcome<M, N, T>,
+    ) {
+        out.evaluated += 1;
+        if let Some(extra) = full(z) {
+            let cost = here + extra;
+            if cost.is_finite() {
+                insert(&mut out.best, Candidate { z: *z, cost });
+                out.bound = self.shrink(&out.best);
+            }
+        }
     }
 
     fn shrink(&self, best: &[Candidate<M, N, T>]) -> T {

@@ -51,9 +51,10 @@ pub fn decorrelate<const N: usize, T: Real>(
     if !q.iter().all(|v| v.is_finite()) {
         return Err(SnapshotError::NonFinite);
     }
-    let n = n.min(N); // (lets the compiler see the indices in range)
-                      // Built in place (the caller's stack holds one copy of the matrices): `z` serves as the
-                      // factorization's workspace before it becomes the transform.
+    // (`min` lets the compiler see the indices in range.) Built in place (the caller's stack
+    // holds one copy of the matrices): `z` serves as the factorization's workspace before it
+    // becomes the transform.
+    let n = n.min(N);
     let mut dec = Decorrelation {
         n,
         l: SMatrix::identity(),
@@ -69,73 +70,13 @@ pub fn decorrelate<const N: usize, T: Real>(
     let Decorrelation {
         l, d, z, z_inv_t, ..
     } = &mut dec;
-    // Integer entries must stay exact in T (2^22 leaves margin in f32).
-    let limit: T = real(4_194_304.0);
     let mut k = n - 2;
     let mut k1 = k;
-    let mut iterations = 0usize;
-    'outer: loop {
-        iterations += 1;
-        if iterations > LAMBDA_MAX_ITERATIONS {
+    for _ in 0..LAMBDA_MAX_ITERATIONS {
+        if k <= k1 && !integer_gauss_column(l, z, z_inv_t, k, n) {
             break;
         }
-        if k <= k1 {
-            for i in (k + 1)..n {
-                // integer Gauss transformation: L(i:n, k) −= μ L(i:n, i), Z(:, k) −= μ Z(:, i)
-                let mu = at(l, i, k).round();
-                if mu != T::zero() {
-                    for r in i..n {
-                        let v = at(l, r, k) - mu * at(l, r, i);
-                        set(l, r, k, v);
-                    }
-                    for r in 0..n {
-                        let zk = at(z, r, k) - mu * at(z, r, i);
-                        let zi = at(z_inv_t, r, i) + mu * at(z_inv_t, r, k);
-                        set(z, r, k, zk);
-                        set(z_inv_t, r, i, zi);
-                        if !(zk.abs() < limit && zi.abs() < limit) {
-                            break 'outer;
-                        }
-                    }
-                }
-            }
-        }
-        let lk = at(l, k + 1, k);
-        let (dk, dk1) = (get(d, k), get(d, k + 1));
-        let del = dk + lk * lk * dk1;
-        // swap k and k+1 when it lowers the conditional variance at k+1 (by more than rounding)
-        if del < dk1 * (T::one() - T::default_epsilon() * real(64.0)) {
-            let eta = dk / del;
-            let lam = dk1 * lk / del;
-            if let Some(x) = d.get_mut(k) {
-                *x = eta * dk1;
-            }
-            if let Some(x) = d.get_mut(k + 1) {
-                *x = del;
-            }
-            for c in 0..k {
-                let a0 = at(l, k, c);
-                let a1 = at(l, k + 1, c);
-                set(l, k, c, -lk * a0 + a1);
-                set(l, k + 1, c, eta * a0 + lam * a1);
-            }
-            set(l, k + 1, k, lam);
-            for r in (k + 2)..n {
-                let t = at(l, r, k);
-                let u = at(l, r, k + 1);
-                set(l, r, k, u);
-                set(l, r, k + 1, t);
-            }
-            for r in 0..n {
-                let t = at(z, r, k);
-                let u = at(z, r, k + 1);
-                set(z, r, k, u);
-                set(z, r, k + 1, t);
-                let t = at(z_inv_t, r, k);
-                let u = at(z_inv_t, r, k + 1);
-                set(z_inv_t, r, k, u);
-                set(z_inv_t, r, k + 1, t);
-            }
+        if swap_if_it_lowers_variance(l, d, z, z_inv_t, k, n) {
             k1 = k;
             k = n - 2;
         } else if k == 0 {
@@ -148,6 +89,94 @@ pub fn decorrelate<const N: usize, T: Real>(
         return Err(SnapshotError::Numerical);
     }
     Ok(dec)
+}
+
+/// Integer entries of `Z` must stay exact in `T` (2^22 leaves margin in f32).
+const LAMBDA_INTEGER_LIMIT: f64 = 4_194_304.0;
+
+/// Integer Gauss transformations of column `k`: `L(i:n, k) −= μ L(i:n, i)`,
+/// `Z(:, k) −= μ Z(:, i)` for `i > k`, `μ = round(L(i, k))`. Returns false (and stops) when an
+/// integer entry would leave the range where `T` holds it exactly.
+fn integer_gauss_column<T: Real, const N: usize>(
+    l: &mut SMatrix<T, N, N>,
+    z: &mut SMatrix<T, N, N>,
+    z_inv_t: &mut SMatrix<T, N, N>,
+    k: usize,
+    n: usize,
+) -> bool {
+    let limit: T = real(LAMBDA_INTEGER_LIMIT);
+    for i in (k + 1)..n {
+        let mu = at(l, i, k).round();
+        if mu == T::zero() {
+            continue;
+        }
+        for r in i..n {
+            let v = at(l, r, k) - mu * at(l, r, i);
+            set(l, r, k, v);
+        }
+        for r in 0..n {
+            let zk = at(z, r, k) - mu * at(z, r, i);
+            let zi = at(z_inv_t, r, i) + mu * at(z_inv_t, r, k);
+            set(z, r, k, zk);
+            set(z_inv_t, r, i, zi);
+            if !(zk.abs() < limit && zi.abs() < limit) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Swaps `k` and `k + 1` when that lowers the conditional variance at `k + 1` (by more than
+/// rounding), updating `L`, `D`, `Z` and `Z⁻ᵀ`. Returns whether it swapped.
+fn swap_if_it_lowers_variance<T: Real, const N: usize>(
+    l: &mut SMatrix<T, N, N>,
+    d: &mut SVector<T, N>,
+    z: &mut SMatrix<T, N, N>,
+    z_inv_t: &mut SMatrix<T, N, N>,
+    k: usize,
+    n: usize,
+) -> bool {
+    let lk = at(l, k + 1, k);
+    let (dk, dk1) = (get(d, k), get(d, k + 1));
+    let del = dk + lk * lk * dk1;
+    if !(del < dk1 * (T::one() - T::default_epsilon() * real(64.0))) {
+        return false;
+    }
+    let eta = dk / del;
+    let lam = dk1 * lk / del;
+    if let Some(x) = d.get_mut(k) {
+        *x = eta * dk1;
+    }
+    if let Some(x) = d.get_mut(k + 1) {
+        *x = del;
+    }
+    for c in 0..k {
+        let a0 = at(l, k, c);
+        let a1 = at(l, k + 1, c);
+        set(l, k, c, -lk * a0 + a1);
+        set(l, k + 1, c, eta * a0 + lam * a1);
+    }
+    set(l, k + 1, k, lam);
+    for r in (k + 2)..n {
+        swap_entries(l, (r, k), (r, k + 1));
+    }
+    for r in 0..n {
+        swap_entries(z, (r, k), (r, k + 1));
+        swap_entries(z_inv_t, (r, k), (r, k + 1));
+    }
+    true
+}
+
+/// Swaps two entries of `m` (in range by construction).
+fn swap_entries<T: Real, const N: usize>(
+    m: &mut SMatrix<T, N, N>,
+    a: (usize, usize),
+    b: (usize, usize),
+) {
+    let (va, vb) = (at(m, a.0, a.1), at(m, b.0, b.1));
+    set(m, a.0, a.1, vb);
+    set(m, b.0, b.1, va);
 }
 
 /// Checked element read (0 outside the matrix; indices are in range by construction, the

@@ -165,30 +165,8 @@ pub fn fuse<T: Real>(
     geometric_trace: &[T; 3],
 ) -> Result<(FilterEstimate<T>, [bool; 3]), DcmError> {
     // 1. anchor: the best-ranked reporting structure whose innovation passed its gate
-    let sound = |e: &FilterEstimate<T>| {
-        !matches!(
-            e.health,
-            FilterHealth::InnovationOutlier | FilterHealth::ConstraintViolated
-        )
-    };
-    let most_precise = |gated_only: bool| {
-        estimates
-            .iter()
-            .zip(geometric_trace)
-            .enumerate()
-            .filter_map(|(k, (e, t))| e.as_ref().map(|e| (k, e, *t)))
-            .filter(|(_, e, _)| !gated_only || e.health != FilterHealth::InnovationOutlier)
-            .fold(
-                None::<(usize, &FilterEstimate<T>, T)>,
-                |best, (k, e, t)| match best {
-                    Some((_, _, bt)) if !(t < bt) => best,
-                    _ => Some((k, e, t)),
-                },
-            )
-            .map(|(k, e, _)| (k, e))
-    };
-    let (anchor_index, anchor) = most_precise(true)
-        .or_else(|| most_precise(false))
+    let (anchor_index, anchor) = most_precise(estimates, geometric_trace, true)
+        .or_else(|| most_precise(estimates, geometric_trace, false))
         .ok_or(DcmError::NotARotation)?;
     let gate: T = real(chi_square_quantile(3, GateConfidence::P999).unwrap_or(16.27));
     // 2. the structures that agree with the anchor, 3. information-weighted
@@ -198,9 +176,13 @@ pub fn fuse<T: Real>(
     for (k, (e, inlier)) in estimates.iter().zip(inliers.iter_mut()).enumerate() {
         let Some(e) = e else { continue };
         let theta = log_so3(&(anchor.c_rb.transpose() * e.c_rb))?;
+        let sound = !matches!(
+            e.health,
+            FilterHealth::InnovationOutlier | FilterHealth::ConstraintViolated
+        );
         let enters = if k == anchor_index {
             true
-        } else if !sound(e) {
+        } else if !sound {
             false
         } else {
             let ch = Cholesky::new(symmetrize(&(e.covariance + anchor.covariance)))
@@ -221,18 +203,7 @@ pub fn fuse<T: Real>(
     let theta = ch.solve(&info_theta);
     let covariance = ch.inverse() * real::<T>(count as f64);
     // 4. health, NIS, attitude
-    let mut health = if count < 3 {
-        FilterHealth::StructuresDisagree
-    } else {
-        FilterHealth::Nominal
-    };
-    if health == FilterHealth::Nominal {
-        for e in estimates.iter().flatten() {
-            if e.health != FilterHealth::Nominal {
-                health = e.health;
-            }
-        }
-    }
+    let health = fused_health(estimates, count);
     let (sum, n) = estimates
         .iter()
         .zip(inliers)
@@ -242,6 +213,47 @@ pub fn fuse<T: Real>(
     let q = (anchor.q_rb * Quaternion::from_rotation_vector(&theta)).normalize()?;
     let fused = FilterEstimate::from_rotation(q.to_dcm(), symmetrize(&covariance), nis, 6, health)?;
     Ok((fused, inliers))
+}
+
+/// The reporting structure with the smallest `geometric_trace`; with `gated_only`, among
+/// those whose innovation passed its gate. Returns its index and estimate.
+fn most_precise<'a, T: Real>(
+    estimates: &'a [Option<FilterEstimate<T>>; 3],
+    geometric_trace: &[T; 3],
+    gated_only: bool,
+) -> Option<(usize, &'a FilterEstimate<T>)> {
+    estimates
+        .iter()
+        .zip(geometric_trace)
+        .enumerate()
+        .filter_map(|(k, (e, t))| e.as_ref().map(|e| (k, e, *t)))
+        .filter(|(_, e, _)| !gated_only || e.health != FilterHealth::InnovationOutlier)
+        .fold(
+            None::<(usize, &FilterEstimate<T>, T)>,
+            |best, (k, e, t)| match best {
+                Some((_, _, bt)) if !(t < bt) => best,
+                _ => Some((k, e, t)),
+            },
+        )
+        .map(|(k, e, _)| (k, e))
+}
+
+/// The fused estimate's health: structures disagree when fewer than three entered, else the
+/// last non-nominal health of any structure, else nominal.
+fn fused_health<T: Real>(
+    estimates: &[Option<FilterEstimate<T>>; 3],
+    inliers: usize,
+) -> FilterHealth {
+    if inliers < 3 {
+        return FilterHealth::StructuresDisagree;
+    }
+    estimates
+        .iter()
+        .flatten()
+        .map(|e| e.health)
+        .filter(|h| *h != FilterHealth::Nominal)
+        .last()
+        .unwrap_or(FilterHealth::Nominal)
 }
 
 #[cfg(test)]

@@ -153,84 +153,9 @@ impl<T: Real> RigidBodyFilter<T> {
     }
 
     fn step_in_place(&mut self, epoch: &BaselineEpoch<T>) -> Result<FilterEstimate<T>, DcmError> {
-        let present = |r: Result<Vector3<T>, DcmError>| match r {
-            Ok(v) => Ok(Some(v)),
-            Err(DcmError::MissingBaseline) => Ok(None),
-            Err(e) => Err(e),
-        };
-        let mut dv = [None; 3];
-        let mut z = [None; 3];
-        for (k, pair) in BaselinePair::ALL.into_iter().enumerate() {
-            if let (Some(d), Some(zz)) = (dv.get_mut(k), z.get_mut(k)) {
-                *d = present(epoch.velocity_difference(pair))?;
-                *zz = present(epoch.baseline(pair))?;
-            }
-        }
-        if dv.iter().flatten().count() < 2 || z.iter().flatten().count() == 0 {
-            return Err(DcmError::MissingBaseline);
-        }
-        // rate baselines: those with a velocity difference
-        let rate_baselines = [0, 1, 2].map(|k| match (dv.get(k), self.baselines.get(k)) {
-            (Some(Some(_)), Some(b)) => Some(*b),
-            _ => None,
-        });
-        let (j, s) = rate_geometry(&rate_baselines);
-        let chol = Cholesky::new(j).ok_or(DcmError::SingularGeometry)?;
-        let l_diag = chol.l_dirty().diagonal();
-        let (lmin, lmax) = (l_diag.min(), l_diag.max());
-        if !(lmin * lmin >= lmax * lmax * real(MIN_RATE_GEOMETRY_RATIO)) {
-            return Err(DcmError::SingularGeometry);
-        }
-        let dt = self.config.dt;
-        let half: T = real(0.5);
-        // ω̂ = J⁻¹ Σ b × (Ĉᵀ ΔV), with Ĉ at the middle of the step (predictor pass first)
-        let ls_rate = |c: &Matrix3<T>| {
-            let mut rhs = Vector3::zeros();
-            for (b, v) in rate_baselines.iter().zip(dv.iter()) {
-                if let (Some(b), Some(v)) = (b, v) {
-                    rhs += b.cross(&(c.transpose() * v));
-                }
-            }
-            chol.solve(&rhs)
-        };
-        let c0 = self.q_rb.to_dcm();
-        let omega0 = ls_rate(&c0);
-        let c_mid =
-            (self.q_rb * Quaternion::from_rotation_vector(&(omega0 * (dt * half)))).to_dcm();
-        let omega = ls_rate(&c_mid);
-        // nominal attitude: q ← q ⊗ exp(ω̂ Δt)
-        let q_pred = (self.q_rb * Quaternion::from_rotation_vector(&(omega * dt))).normalize()?;
-        // error state: F = −[ω̂]× + J⁻¹ [ω̂]× S;  Φ = I + F Δt + (F Δt)²/2;  Q = σ_v² Δt² J⁻¹
-        let j_inv = chol.inverse();
-        let f = (-skew(&omega) + j_inv * skew(&omega) * s) * dt;
-        let transition = Matrix3::identity() + f + f * f * half;
-        let sv = self.config.sigma_velocity;
-        let q = symmetrize(&(j_inv * (sv * sv * dt * dt)));
-        self.ekf.predict_to(&Vector3::zeros(), &transition, &q)?;
-        // updates: Ĉᵀ Z − b = −[b]× δθ + noise, one baseline at a time
-        let c_pred = q_pred.to_dcm();
-        let sp = self.config.sigma_baseline;
-        let r = Matrix3::identity() * (sp * sp);
-        let gate = match self.config.gate {
-            Some(g) if self.rejected_in_a_row < GATE_RECOVERY_EPOCHS => {
-                Some(NisGate::chi_square(3, g))
-            }
-            _ => None,
-        };
-        let mut nis = T::zero();
-        let (mut offered, mut rejected) = (0u8, 0u8);
-        for (b, zk) in self.baselines.iter().zip(z.iter()) {
-            if let Some(zk) = zk {
-                let h = -skew(b);
-                let y = c_pred.transpose() * zk - b - h * self.ekf.state();
-                let report = self.ekf.update(&y, &h, &r, gate)?;
-                nis += report.nis;
-                offered += 1;
-                if !report.accepted {
-                    rejected += 1;
-                }
-            }
-        }
+        let measured = PairMeasurements::of(epoch)?;
+        let (q_pred, omega) = self.predict(&measured)?;
+        let (nis, offered, rejected) = self.update_baselines(&q_pred, &measured.baselines)?;
         self.rejected_in_a_row = if rejected > 0 {
             self.rejected_in_a_row.saturating_add(1)
         } else {
@@ -253,6 +178,157 @@ impl<T: Real> RigidBodyFilter<T> {
             offered.saturating_mul(3),
             health,
         )
+    }
+
+    /// The rate from the velocity differences (midpoint predictor–corrector), the nominal
+    /// attitude propagated by it, and the error state's covariance propagated over the step.
+    /// Returns the predicted attitude and the body rate, rad/s.
+    fn predict(
+        &mut self,
+        measured: &PairMeasurements<T>,
+    ) -> Result<(Quaternion<T>, Vector3<T>), DcmError> {
+        let rate = RateSolver::new(&self.baselines, &measured.velocity_differences)?;
+        let dt = self.config.dt;
+        let half: T = real(0.5);
+        let c0 = self.q_rb.to_dcm();
+        let omega0 = rate.body_rate(&c0);
+        let c_mid =
+            (self.q_rb * Quaternion::from_rotation_vector(&(omega0 * (dt * half)))).to_dcm();
+        let omega = rate.body_rate(&c_mid);
+        // nominal attitude: q ← q ⊗ exp(ω̂ Δt)
+        let q_pred = (self.q_rb * Quaternion::from_rotation_vector(&(omega * dt))).normalize()?;
+        // error state: F = −[ω̂]× + J⁻¹ [ω̂]× S;  Φ = I + F Δt + (F Δt)²/2;  Q = σ_v² Δt² J⁻¹
+        let j_inv = rate.chol.inverse();
+        let f = (-skew(&omega) + j_inv * skew(&omega) * rate.s) * dt;
+        let transition = Matrix3::identity() + f + f * f * half;
+        let sv = self.config.sigma_velocity;
+        let q = symmetrize(&(j_inv * (sv * sv * dt * dt)));
+        self.ekf.predict_to(&Vector3::zeros(), &transition, &q)?;
+        Ok((q_pred, omega))
+    }
+
+    /// One gated update per measured baseline: `Ĉᵀ Z − b = −[b]× δθ + noise`. Returns the
+    /// summed NIS and the counts of baselines offered and rejected.
+    fn update_baselines(
+        &mut self,
+        q_pred: &Quaternion<T>,
+        measured: &[Option<Vector3<T>>; 3],
+    ) -> Result<(T, u8, u8), DcmError> {
+        let c_pred = q_pred.to_dcm();
+        let sp = self.config.sigma_baseline;
+        let r = Matrix3::identity() * (sp * sp);
+        let gate = match self.config.gate {
+            Some(g) if self.rejected_in_a_row < GATE_RECOVERY_EPOCHS => {
+                Some(NisGate::chi_square(3, g))
+            }
+            _ => None,
+        };
+        let mut nis = T::zero();
+        let (mut offered, mut rejected) = (0u8, 0u8);
+        for (b, zk) in self.baselines.iter().zip(measured.iter()) {
+            if let Some(zk) = zk {
+                let h = -skew(b);
+                let y = c_pred.transpose() * zk - b - h * self.ekf.state();
+                let report = self.ekf.update(&y, &h, &r, gate)?;
+                nis += report.nis;
+                offered += 1;
+                if !report.accepted {
+                    rejected += 1;
+                }
+            }
+        }
+        Ok((nis, offered, rejected))
+    }
+}
+
+/// One epoch's measurements by baseline pair (`None` where the pair is missing).
+struct PairMeasurements<T: Real> {
+    /// Velocity differences, reference frame, m/s.
+    velocity_differences: [Option<Vector3<T>>; 3],
+    /// Baselines, reference frame, m.
+    baselines: [Option<Vector3<T>>; 3],
+}
+
+impl<T: Real> PairMeasurements<T> {
+    /// Sorts the epoch's measurements by pair; at least two velocity differences and one
+    /// baseline are required.
+    fn of(epoch: &BaselineEpoch<T>) -> Result<Self, DcmError> {
+        let present = |r: Result<Vector3<T>, DcmError>| match r {
+            Ok(v) => Ok(Some(v)),
+            Err(DcmError::MissingBaseline) => Ok(None),
+            Err(e) => Err(e),
+        };
+        let mut m = Self {
+            velocity_differences: [None; 3],
+            baselines: [None; 3],
+        };
+        for ((pair, dv), z) in BaselinePair::ALL
+            .into_iter()
+            .zip(m.velocity_differences.iter_mut())
+            .zip(m.baselines.iter_mut())
+        {
+            *dv = present(epoch.velocity_difference(pair))?;
+            *z = present(epoch.baseline(pair))?;
+        }
+        if m.velocity_differences.iter().flatten().count() < 2
+            || m.baselines.iter().flatten().count() == 0
+        {
+            return Err(DcmError::MissingBaseline);
+        }
+        Ok(m)
+    }
+}
+
+/// The least-squares body rate from velocity differences:
+/// `ω̂ = J⁻¹ Σ b × (Ĉᵀ ΔV)` over the baselines that have a velocity difference.
+struct RateSolver<'a, T: Real> {
+    chol: Cholesky<T, nalgebra::U3>,
+    /// `S` of the rate geometry (see `rate_geometry`).
+    s: Matrix3<T>,
+    rate_baselines: [Option<Vector3<T>>; 3],
+    velocity_differences: &'a [Option<Vector3<T>>; 3],
+}
+
+impl<'a, T: Real> RateSolver<'a, T> {
+    /// Factors the rate geometry; [`DcmError::SingularGeometry`] when the baselines with a
+    /// velocity difference are (nearly) parallel.
+    fn new(
+        baselines: &[Vector3<T>; 3],
+        velocity_differences: &'a [Option<Vector3<T>>; 3],
+    ) -> Result<Self, DcmError> {
+        let rate_baselines =
+            [0, 1, 2].map(|k| match (velocity_differences.get(k), baselines.get(k)) {
+                (Some(Some(_)), Some(b)) => Some(*b),
+                _ => None,
+            });
+        let (j, s) = rate_geometry(&rate_baselines);
+        let chol = Cholesky::new(j).ok_or(DcmError::SingularGeometry)?;
+        let l_diag = chol.l_dirty().diagonal();
+        let (lmin, lmax) = (l_diag.min(), l_diag.max());
+        if !(lmin * lmin >= lmax * lmax * real(MIN_RATE_GEOMETRY_RATIO)) {
+            return Err(DcmError::SingularGeometry);
+        }
+        Ok(Self {
+            chol,
+            s,
+            rate_baselines,
+            velocity_differences,
+        })
+    }
+
+    /// The body rate with the attitude `c` (body to reference), rad/s.
+    fn body_rate(&self, c: &Matrix3<T>) -> Vector3<T> {
+        let mut rhs = Vector3::zeros();
+        for (b, v) in self
+            .rate_baselines
+            .iter()
+            .zip(self.velocity_differences.iter())
+        {
+            if let (Some(b), Some(v)) = (b, v) {
+                rhs += b.cross(&(c.transpose() * v));
+            }
+        }
+        self.chol.solve(&rhs)
     }
 }
 

@@ -30,7 +30,9 @@ use crate::ekf::{chi_square_quantile, GateConfidence};
 use crate::geometry::{skew, Euler321, Quaternion};
 use crate::{real, Real};
 
-use super::range_model::{los_normal_matrix, BaselineCorrelation, Baselines, RangeDifferences};
+use super::range_model::{
+    los_normal_matrix, BaselineCorrelation, Baselines, RangeDifferences, SatelliteRanges,
+};
 use super::wahba::{WahbaPair, WahbaProblem};
 use crate::error::{Error, ErrorKind};
 use crate::geometry::GeometryError;
@@ -173,45 +175,15 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             r * r
         };
         let (info, info_inv) = los_normal_matrix(sats.iter().map(|s| (s.los, weight(s.sigma))))?;
-        // Step 1: a_i = (S W Sᵀ)⁻¹ S W r_i
-        let mut a = [Vector3::<T>::zeros(); M];
-        for (i, ai) in a.iter_mut().enumerate() {
-            let mut rhs = Vector3::zeros();
-            for s in sats {
-                if let Some(&r) = s.range_diff.get(i) {
-                    rhs += s.los * (r * weight(s.sigma));
-                }
-            }
-            *ai = info_inv * rhs;
-        }
+        let a = least_squares_baselines(sats, &weight, &info_inv);
         // Steps 2–4 in the baseline domain (the start), then step 4 on the ranges themselves:
         // in f32 the LS baselines a_i inherit cond(N) ε of rounding with a poor sky, the range
         // residuals do not.
         let start = self.fit_reference_baselines(&a, &info)?;
         let fit = self.range_gauss_newton(start.q_rb, sats, &weight, scale)?;
         let c_rb = fit.q_rb.to_dcm();
-        // Residuals of eq. (4), weighted by (σ_j² Σ_B)⁻¹
-        let w_b = self.correlation.inverse();
-        let mut chi_square = T::zero();
-        let mut sum_sq = T::zero();
-        for s in sats {
-            let predicted = self.baselines.range_differences(&c_rb, &s.los);
-            let mut e = [T::zero(); M];
-            for ((ei, &r), &p) in e.iter_mut().zip(s.range_diff.iter()).zip(predicted.iter()) {
-                *ei = r - p;
-                sum_sq += *ei * *ei;
-            }
-            let mut q = T::zero();
-            for (i, &ei) in e.iter().enumerate() {
-                for (k, &ek) in e.iter().enumerate() {
-                    q += ei * w_b[(i, k)] * ek;
-                }
-            }
-            chi_square += q * weight(s.sigma);
-        }
-        chi_square /= scale;
+        let (chi_square, residual_rms) = self.residuals(&c_rb, sats, &weight, scale);
         let count = M * sats.len();
-        let residual_rms = (sum_sq / real(count as f64)).sqrt();
         let covariance = fit
             .hessian
             .cholesky()
@@ -241,6 +213,37 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             iterations: fit.iterations,
             quality,
         })
+    }
+
+    /// The residuals of eq. (4) at the solution `c_rb`: χ² weighted by `(σ_j² Σ_B)⁻¹` (in the
+    /// units of σ², through `scale` = σ_min²) and the RMS range-difference residual, m.
+    fn residuals(
+        &self,
+        c_rb: &Matrix3<T>,
+        sats: &[SatelliteRanges<M, T>],
+        weight: &impl Fn(T) -> T,
+        scale: T,
+    ) -> (T, T) {
+        let w_b = self.correlation.inverse();
+        let mut chi_square = T::zero();
+        let mut sum_sq = T::zero();
+        for s in sats {
+            let predicted = self.baselines.range_differences(c_rb, &s.los);
+            let mut e = [T::zero(); M];
+            for ((ei, &r), &p) in e.iter_mut().zip(s.range_diff.iter()).zip(predicted.iter()) {
+                *ei = r - p;
+                sum_sq += *ei * *ei;
+            }
+            let mut q = T::zero();
+            for (i, &ei) in e.iter().enumerate() {
+                for (k, &ek) in e.iter().enumerate() {
+                    q += ei * w_b[(i, k)] * ek;
+                }
+            }
+            chi_square += q * weight(s.sigma);
+        }
+        let count = M * sats.len();
+        (chi_square / scale, (sum_sq / real(count as f64)).sqrt())
     }
 
     /// Steps 2–4: the rotation that best fits reference-frame baseline estimates `a_i` whose
@@ -482,4 +485,24 @@ impl Error for SnapshotError {
             Self::Geometry(e) => e.kind(),
         }
     }
+}
+
+/// Step 1: the reference-frame baselines by weighted least squares,
+/// `a_i = (S W Sᵀ)⁻¹ S W r_i`, m.
+fn least_squares_baselines<const M: usize, T: Real>(
+    sats: &[SatelliteRanges<M, T>],
+    weight: &impl Fn(T) -> T,
+    info_inv: &Matrix3<T>,
+) -> [Vector3<T>; M] {
+    let mut a = [Vector3::<T>::zeros(); M];
+    for (i, ai) in a.iter_mut().enumerate() {
+        let mut rhs = Vector3::zeros();
+        for s in sats {
+            if let Some(&r) = s.range_diff.get(i) {
+                rhs += s.los * (r * weight(s.sigma));
+            }
+        }
+        *ai = info_inv * rhs;
+    }
+    a
 }

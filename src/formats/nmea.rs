@@ -256,6 +256,8 @@ fn to_sentence(
     let mut buf = [0u8; MAX_SENTENCE];
     let n = write(heading, &mut buf)?;
     let ascii = buf.get(..n).ok_or(FormatError::BufferTooShort)?;
+    // (`write` emits ASCII only, so a UTF-8 refusal can only be a sentence cut short; and the
+    // sentence has MAX_SENTENCE bytes of room: both causes are the one variant names)
     let text = core::str::from_utf8(ascii).map_err(|_| FormatError::BufferTooShort)?;
     let mut s = Sentence::new();
     s.push_str(text).map_err(|_| FormatError::BufferTooShort)?;

@@ -9,7 +9,7 @@ use crate::attitude::gyro_aided::GyroAidedReport;
 use crate::attitude::one_stage::LockStatus;
 use crate::geometry::Quaternion;
 
-use super::carrier::{cold_start, Windowed};
+use super::carrier::{cold_start, ColdFix, Windowed};
 use super::gyro_frame::seconds;
 use super::{
     AttitudeReceiver, Integrity, IntegrityCheck, LossReason, ReceiverEvent, SnapshotFix,
@@ -353,7 +353,7 @@ impl AttitudeReceiver {
         let Some(cold) = cold_start(&self.solvers.resolver, windows, sigma_ref, None) else {
             return;
         };
-        let (fix, ks) = (cold.solution, cold.slots);
+        let fix = &cold.solution;
         let (q_fine, p_fine, source) = self.best_attitude(centre);
         if source == super::AttitudeSource::None {
             return;
@@ -389,6 +389,19 @@ impl AttitudeReceiver {
         if self.integrity.failed_checks < CHECKS_TO_ALARM {
             return;
         }
+        self.raise_integrity_alarm(k, centre, d.norm(), cold, m_centre);
+    }
+
+    /// A gross disagreement that persisted: the alarm (health, event), then the fresh fix's
+    /// integers, line biases and attitude replace the fine filter's.
+    fn raise_integrity_alarm(
+        &mut self,
+        k: u64,
+        centre: u64,
+        angle_rad: f32,
+        cold: ColdFix,
+        m_centre: &Quaternion<f32>,
+    ) {
         if let Some(c) = self.integrity.last_check.as_mut() {
             c.alarm = true;
         }
@@ -396,12 +409,12 @@ impl AttitudeReceiver {
         self.integrity.check_inflation = 1.0;
         self.integrity.checked = Integrity::Alarm;
         self.health.integrity = Integrity::Alarm;
-        let angle_mrad = (d.norm() * 1e3).min(f32::from(u16::MAX)) as u16;
+        let angle_mrad = (angle_rad * 1e3).min(f32::from(u16::MAX)) as u16;
         self.events.push(ReceiverEvent::IntegrityAlarm {
             epoch: k,
             angle_mrad,
         });
-        for (slot, kk) in &ks {
+        for (slot, kk) in &cold.slots {
             if let Some(s) = self.slots.get_mut(*slot) {
                 s.ambiguity = [Some(kk[0]), Some(kk[1])];
             }
@@ -409,6 +422,7 @@ impl AttitudeReceiver {
         if let Some((bias, sigma)) = cold.line_bias {
             self.line_bias = super::LineBias::from_cycles(bias, sigma);
         }
+        let fix = cold.solution;
         self.snapshot = Some(SnapshotFix {
             estimate: StageEstimate {
                 epoch: centre,
