@@ -6,7 +6,7 @@
 //! | option | range |
 //! |---|---|
 //! | `--fs` | `(0, 64 MHz]` ([`MAX_SAMPLE_RATE_HZ`], the correlator's limit) |
-//! | `--if` | finite, `|f_IF| ≤ 32 MHz` ([`MAX_IF_HZ`]) |
+//! | `--if` | finite, within ±32 MHz ([`MAX_IF_HZ`]) |
 //! | `synth --seconds` | `(0, 3600]` s ([`MAX_SYNTH_SECONDS`]), and at most [`MAX_SYNTH_OUTPUT_BYTES`] written |
 //! | `track --seconds` | finite, `> 0` (longer than the recording: a warning, the whole recording tracked) |
 //! | `--cn0`, `--cn0-min`, `--cn0-max` | `[0, 60]` dB-Hz ([`MAX_SYNTH_CN0_DBHZ`]) |
