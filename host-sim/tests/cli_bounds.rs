@@ -167,6 +167,12 @@ fn track_seconds_and_ms_beyond_the_recording_say_what_they_do() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("recording.truth.json")).unwrap()).unwrap();
+    let prns = format!(
+        "{},{}",
+        truth["satellites"][0]["prn"], truth["satellites"][1]["prn"]
+    );
     let file = dir.join("recording.cs8");
     let f = file.to_str().unwrap();
     let out = host_sim(&[
@@ -177,6 +183,8 @@ fn track_seconds_and_ms_beyond_the_recording_say_what_they_do() {
         "cs8",
         "--fs",
         "2.6e6",
+        "--prns",
+        &prns,
         "--seconds",
         "1000",
         "--json",
@@ -186,11 +194,11 @@ fn track_seconds_and_ms_beyond_the_recording_say_what_they_do() {
     assert!(err.contains("holds 0.300 s, --seconds asks 1000"), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!((v["tracked_s"].as_f64().unwrap() - 0.3).abs() < 1e-3, "{v}");
-    // 0.3 s holds 299 whole milliseconds: --ms 100 sums 100 (and verifies on 100 more); on
-    // the first 150 ms only 74 fit
+    // the first 30 ms hold 29 whole milliseconds (and the one extra sample a search reads):
+    // --ms 20 and as many again for the verification do not fit, 14 do
     let short = dir.join("short.cs8");
     let bytes = std::fs::read(&file).unwrap();
-    std::fs::write(&short, &bytes[..2 * 390_000]).unwrap();
+    std::fs::write(&short, &bytes[..2 * 78_000]).unwrap();
     let out = host_sim(&[
         "acquire",
         "--file",
@@ -199,14 +207,57 @@ fn track_seconds_and_ms_beyond_the_recording_say_what_they_do() {
         "cs8",
         "--fs",
         "2.6e6",
+        "--prns",
+        &prns,
         "--ms",
-        "100",
+        "20",
         "--json",
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(
-        err.contains("holds 149 ms, --ms asks 100") && err.contains("summing 74 ms"),
+        err.contains("holds 29 ms, --ms asks 20") && err.contains("summing 14 ms"),
         "{err}"
     );
+}
+
+#[test]
+fn track_on_a_recording_longer_than_5_s_shows_progress_on_stderr_only() {
+    let dir = temp_dir("progress");
+    let d = dir.to_str().unwrap();
+    let out = host_sim(&synth_args(
+        d,
+        &["--fs", "2.1e6", "--seconds", "6", "--cn0", "48"],
+    ));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("recording.truth.json")).unwrap()).unwrap();
+    let prn = truth["satellites"][0]["prn"].to_string();
+    let file = dir.join("recording.cs8");
+    let out = host_sim(&[
+        "track",
+        "--file",
+        file.to_str().unwrap(),
+        "--format",
+        "cs8",
+        "--fs",
+        "2.1e6",
+        "--prns",
+        &prn,
+        "--json",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    // stderr is a pipe here, not a terminal: plain lines every tenth of the recording
+    let lines = err.lines().filter(|l| l.starts_with("track: ")).count();
+    assert!((9..=10).contains(&lines), "{err}");
+    assert!(err.contains("of 6.0 s (100 %)"), "{err}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.trim().lines().count(), 1, "{text}");
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!((v["tracked_s"].as_f64().unwrap() - 6.0).abs() < 1e-3, "{v}");
 }
