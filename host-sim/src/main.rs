@@ -20,7 +20,9 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 
-use host_sim::record::{self, AcquireOptions, Dynamics, FileFormat, Recording, RecordingSpec};
+use host_sim::record::{
+    self, limits, AcquireOptions, Dynamics, FileFormat, Recording, RecordingSpec,
+};
 use host_sim::report::print_human;
 use host_sim::scenarios::{self, RunContext};
 
@@ -114,8 +116,9 @@ struct TrackArgs {
     file: FileArgs,
     #[command(flatten)]
     search: SearchArgs,
-    /// Seconds to track (default: the whole recording).
-    #[arg(long)]
+    /// Seconds to track (default: the whole recording; longer than the recording: a warning,
+    /// the whole recording is tracked).
+    #[arg(long, value_parser = limits::track_seconds)]
     seconds: Option<f64>,
     /// Do not re-acquire satellites that lost lock.
     #[arg(long)]
@@ -128,10 +131,10 @@ struct TrackArgs {
     sky: Option<PathBuf>,
     /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2' (a bench
     /// calibration; without it they are estimated with the integers in each window).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = limits::finite)]
     line_bias: Option<Vec<f64>>,
-    /// Attitude window, s.
-    #[arg(long, default_value_t = 1.0)]
+    /// Attitude window, s (up to 60).
+    #[arg(long, default_value_t = 1.0, value_parser = limits::attitude_window_s)]
     attitude_window: f64,
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
@@ -153,14 +156,14 @@ struct SynthArgs {
     /// Layout (see `acquire --help`).
     #[arg(long)]
     format: String,
-    /// Sample rate, Hz.
-    #[arg(long)]
+    /// Sample rate, Hz (up to 64 MHz).
+    #[arg(long, value_parser = limits::sample_rate_hz)]
     fs: f64,
     /// Intermediate frequency, Hz (default 0 for complex layouts, fs/4 for real ones).
-    #[arg(long = "if")]
+    #[arg(long = "if", allow_negative_numbers = true, value_parser = limits::intermediate_frequency_hz)]
     if_hz: Option<f64>,
-    /// Duration, s.
-    #[arg(long)]
+    /// Duration, s (up to 3600, and at most 16 GiB written).
+    #[arg(long, value_parser = limits::synth_seconds)]
     seconds: f64,
     /// Antennas: 1, or 3 (paper 003's 1.5 m triangle).
     #[arg(long, default_value_t = 1)]
@@ -169,31 +172,31 @@ struct SynthArgs {
     /// ground receiver.
     #[arg(long)]
     leo: bool,
-    /// Number of satellites (default 8, or as many as `--cn0` values).
-    #[arg(long)]
-    satellites: Option<usize>,
+    /// Number of satellites, 1-12 (default 8, or as many as `--cn0` values).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=12))]
+    satellites: Option<u8>,
     /// C/N0 of each satellite, dB-Hz, up to 60 (comma-separated; instead of the
     /// `--cn0-min`..`--cn0-max` spread).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = limits::cn0_dbhz)]
     cn0: Option<Vec<f64>>,
     /// Signals only, no thermal noise (quantized with the same gain).
     #[arg(long)]
     no_noise: bool,
     /// A continuous-wave interferer: 'offset_hz,jn_db' (offset from the band centre, power
     /// over the noise power).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = limits::finite)]
     cw: Option<Vec<f64>>,
     /// A constant offset added: 'i,q' in noise σ (16 LSB in CS8).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = limits::finite)]
     dc: Option<Vec<f64>>,
     /// Every sample replaced by 'i,q' in noise σ (e.g. '100,100' saturates: CS8 +127).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = limits::finite)]
     constant: Option<Vec<f64>>,
-    /// Lowest C/N0, dB-Hz.
-    #[arg(long, default_value_t = 40.0)]
+    /// Lowest C/N0, dB-Hz (0-60).
+    #[arg(long, default_value_t = 40.0, value_parser = limits::cn0_dbhz)]
     cn0_min: f64,
-    /// Highest C/N0, dB-Hz.
-    #[arg(long, default_value_t = 50.0)]
+    /// Highest C/N0, dB-Hz (0-60).
+    #[arg(long, default_value_t = 50.0, value_parser = limits::cn0_dbhz)]
     cn0_max: f64,
     /// Seed of the sky, data and noise.
     #[arg(long, default_value_t = 1)]
@@ -210,11 +213,11 @@ struct FileArgs {
     /// "Recorded sample files" documents the byte layouts).
     #[arg(long)]
     format: String,
-    /// Sample rate, Hz.
-    #[arg(long)]
+    /// Sample rate, Hz (up to 64 MHz).
+    #[arg(long, value_parser = limits::sample_rate_hz)]
     fs: f64,
     /// Intermediate frequency, Hz (required for real layouts; default 0 for complex ones).
-    #[arg(long = "if")]
+    #[arg(long = "if", allow_negative_numbers = true, value_parser = limits::intermediate_frequency_hz)]
     if_hz: Option<f64>,
     /// Channels of a multi-channel file used as antennas 0, 1, ... (comma-separated).
     #[arg(long, value_delimiter = ',')]
@@ -238,27 +241,28 @@ impl FileArgs {
 #[derive(Args)]
 struct SearchArgs {
     /// Doppler search half-range, Hz (50000 for LEO recordings).
-    #[arg(long, default_value_t = 10_000.0)]
+    #[arg(long, default_value_t = 10_000.0, value_parser = limits::doppler_max_hz)]
     doppler_max: f64,
-    /// Doppler bin spacing, Hz.
-    #[arg(long, default_value_t = 500.0)]
+    /// Doppler bin spacing, Hz (10 Hz to 100 kHz).
+    #[arg(long, default_value_t = 500.0, value_parser = limits::doppler_step_hz)]
     doppler_step: f64,
-    /// Milliseconds summed non-coherently from the file's start (1-100).
-    #[arg(long, default_value_t = 20)]
+    /// Milliseconds summed non-coherently from the file's start (1-100; fewer when the
+    /// recording holds less than twice as many, with a warning).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u16).range(1..=100))]
     ms: u16,
     /// PRNs to search (comma-separated; default 1-32).
     #[arg(long, value_delimiter = ',')]
     prns: Option<Vec<u8>>,
-    /// False-alarm probability per PRN search.
-    #[arg(long, default_value_t = 1e-5)]
+    /// False-alarm probability per PRN search, in (0, 0.5).
+    #[arg(long, default_value_t = 1e-5, value_parser = limits::false_alarm_probability)]
     pfa: f64,
     /// Antenna searched.
     #[arg(long, default_value_t = 0)]
     antenna: usize,
     /// Margin of the cross-correlation test, dB: a detection at most this much above the
     /// cross-correlation the stronger satellites predict at it is rejected (0 switches the
-    /// test off).
-    #[arg(long, default_value_t = 3.0)]
+    /// test off; up to 20).
+    #[arg(long, default_value_t = 3.0, value_parser = limits::xcorr_margin_db)]
     xcorr_margin_db: f64,
 }
 
@@ -391,7 +395,7 @@ fn synth_command(args: SynthArgs) -> anyhow::Result<()> {
     } = args;
     let overlays = overlays(cw, dc, constant)?;
     let cn0 = cn0.unwrap_or_default();
-    let satellites = satellites.unwrap_or(if cn0.is_empty() { 8 } else { cn0.len() });
+    let satellites = satellites.map_or(if cn0.is_empty() { 8 } else { cn0.len() }, usize::from);
     let spec = record::SynthSpec {
         format: FileFormat::parse(&format)?,
         sample_rate_hz: fs,
@@ -547,8 +551,12 @@ fn attitude_setup(
         return Ok(None);
     };
     let sky = sky.context("--baselines needs --sky (the lines of sight)")?;
-    let text = std::fs::read_to_string(sky)
-        .with_context(|| format!("reading the sky file {}", sky.display()))?;
+    let text = limits::read_text_capped(
+        sky,
+        limits::MAX_SKY_FILE_BYTES,
+        limits::MAX_SKY_LINE_CHARS,
+        "sky file",
+    )?;
     let bias = line_bias
         .map(|b| {
             anyhow::ensure!(

@@ -416,11 +416,11 @@ fn bad_files_get_clear_errors() {
         ),
         (
             &["--file", &even, "--format", "cs8", "--fs", "nan"],
-            "not a positive number",
+            "--fs <FS>': NaN is not finite",
         ),
         (
             &["--file", &even, "--format", "cs8", "--fs", "100e6"],
-            "above",
+            "outside the allowed range (0, 64000000] Hz",
         ),
         (
             &["--file", &short, "--format", "cs8", "--fs", "2.6e6"],
@@ -461,6 +461,21 @@ fn bad_files_get_clear_errors() {
                 "2.6e6",
                 "--doppler-max",
                 "500000",
+            ],
+            "--doppler-max <DOPPLER_MAX>': 500000 is outside the allowed range [0, 100000] Hz",
+        ),
+        (
+            &[
+                "--file",
+                &even,
+                "--format",
+                "cs8",
+                "--fs",
+                "2.6e6",
+                "--doppler-max",
+                "100000",
+                "--doppler-step",
+                "10",
             ],
             "bins",
         ),

@@ -226,7 +226,7 @@ pub fn acquire_with_searches(
     let ms = u64::from(opts.ms).min(available / 2).max(1) as u16;
     if ms < opts.ms {
         eprintln!(
-            "acquire: the recording holds {available} ms: summing {ms} ms (and {ms} ms of verification) instead of {}",
+            "acquire: the recording holds {available} ms, --ms asks {} (and as many again for the verification dwell): summing {ms} ms and verifying on the next {ms} ms",
             opts.ms
         );
     }

@@ -3,6 +3,8 @@
 //! synthesized recordings that test it (`host-sim synth`).
 //!
 //! * [`format`](mod@format): the `--format` names and byte layouts (single- and multi-channel).
+//! * [`limits`]: the ranges of the commands' options (clap value parsers), `synth`'s largest
+//!   output, text inputs read with a size cap.
 //! * [`reader`]: validation with clear errors, and streaming block reads (bounded memory).
 //! * [`acquire`](mod@acquire): acquisition over the first milliseconds.
 //! * [`acquisition_stats`]: detection and false alarms measured on every background.
@@ -19,6 +21,7 @@ pub mod acquisition_stats;
 pub mod attitude;
 pub mod attitude_setup;
 pub mod format;
+pub mod limits;
 pub mod reader;
 pub mod report;
 pub mod satellite;

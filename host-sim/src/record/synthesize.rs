@@ -398,13 +398,44 @@ pub fn open_synthesized(dir: &Path, truth: &RecordingTruth) -> Result<Recording>
     })
 }
 
+/// The bounds of [`super::limits`]: a duration in `(0, MAX_SYNTH_SECONDS]`, a sample rate in
+/// `(0, MAX_SAMPLE_RATE_HZ]`, a finite IF, at most `MAX_SYNTH_OUTPUT_BYTES` written.
+fn check_bounds(spec: &SynthSpec) -> Result<()> {
+    use super::limits::{
+        synth_output_bytes, MAX_SAMPLE_RATE_HZ, MAX_SYNTH_OUTPUT_BYTES, MAX_SYNTH_SECONDS,
+    };
+    let (fs, seconds) = (spec.sample_rate_hz, spec.seconds);
+    ensure!(
+        seconds.is_finite() && seconds > 0.0 && seconds <= MAX_SYNTH_SECONDS,
+        "--seconds {seconds}: the synthesizer writes (0, {MAX_SYNTH_SECONDS}] s"
+    );
+    ensure!(
+        fs.is_finite() && fs > 0.0 && fs <= MAX_SAMPLE_RATE_HZ,
+        "--fs {fs} Hz: the synthesizer takes (0, {MAX_SAMPLE_RATE_HZ}] Hz"
+    );
+    if let Some(f) = spec.intermediate_frequency_hz {
+        ensure!(f.is_finite(), "--if {f} Hz is not finite");
+    }
+    let bytes = synth_output_bytes(&spec.format, spec.antennas, (seconds * fs).round() as u64);
+    ensure!(
+        bytes <= MAX_SYNTH_OUTPUT_BYTES,
+        "{seconds} s at {:.3} Msps in {} on {} antenna(s) is {:.2} GiB, more than the {} GiB synth writes: shorten --seconds or lower --fs",
+        fs / 1e6,
+        spec.format.name(),
+        spec.antennas,
+        bytes as f64 / f64::from(1u32 << 30),
+        MAX_SYNTH_OUTPUT_BYTES >> 30
+    );
+    Ok(())
+}
+
 /// Synthesizes the recording into `dir`, streamed in blocks (memory independent of the
 /// duration): the sample files, `<name>.truth.json` and `<name>.sky.csv`. Returns the truth
 /// and the paths of the sample files.
 ///
 /// # Errors
-/// A layout whose channel count does not match the antennas, a bad sky (see [`scene`]),
-/// I/O errors.
+/// A layout whose channel count does not match the antennas, a duration, rate or size beyond
+/// the bounds of [`super::limits`], a bad sky (see [`scene`]), I/O errors.
 pub fn write_recording(
     dir: &Path,
     name: &str,
@@ -418,11 +449,7 @@ pub fn write_recording(
         format.channels,
         spec.antennas
     );
-    ensure!(
-        spec.seconds.is_finite() && spec.seconds > 0.0,
-        "duration {} s",
-        spec.seconds
-    );
+    check_bounds(spec)?;
     let (scene, satellites) = scene(spec)?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let names = file_names(name, &format, spec.antennas);

@@ -180,7 +180,16 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         channels.push((ch, SatTrack::new(*r, fs, phases)));
     }
     let total = match opts.seconds {
-        Some(s) => ((s * fs).round() as u64).min(rec.instants),
+        Some(s) => {
+            let asked = (s * fs).round();
+            if asked > rec.instants as f64 {
+                eprintln!(
+                    "track: the recording holds {:.3} s, --seconds asks {s}: tracking the whole recording",
+                    rec.seconds()
+                );
+            }
+            (asked as u64).min(rec.instants)
+        }
         None => rec.instants,
     };
     let mut reader = rec.reader()?;
@@ -189,7 +198,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
     let acq_config = opts.acquire.config(rec, acq_report.noncoherent_ms)?;
     let mut attitude = solver.map(|s| (s, Vec::new()));
     let mut next_window = 0usize;
-    let bar = crate::report::progress(total.div_ceil(opts.block as u64), "tracking");
+    let mut progress = Progress::new(total, opts.block, fs);
     loop {
         let left = total.saturating_sub(reader.position());
         if left == 0 {
@@ -206,7 +215,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         let now = (block.first + block.len() as u64) as f64 / fs;
         release_cross_correlations(&mut channels, now);
         wall.tracking_s += t0.elapsed().as_secs_f64();
-        bar.inc(1);
+        progress.advance(now, channels.iter().filter(|(_, s)| s.active).count());
         if opts.reacquire {
             let t0 = Instant::now();
             reacquire(
@@ -234,7 +243,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
             wall.attitude_s += t0.elapsed().as_secs_f64();
         }
     }
-    bar.finish_and_clear();
+    progress.finish();
     let end_t = total as f64 / fs;
     let attitude = match attitude {
         Some((solver, mut out)) => {
@@ -265,6 +274,59 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         },
         tracks,
     })
+}
+
+/// Recordings longer than this show their progress on stderr, s.
+pub const PROGRESS_AFTER_S: f64 = 5.0;
+
+/// Lines of plain progress (stderr not a terminal) over a recording.
+const PROGRESS_LINES: u32 = 10;
+
+/// The progress of `track` on stderr for recordings longer than [`PROGRESS_AFTER_S`]: a bar
+/// on a terminal, else a line every tenth of the recording (logs, CI). Stdout is untouched.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    total_s: f64,
+    next_line: u32,
+}
+
+impl Progress {
+    fn new(total: u64, block: usize, fs: f64) -> Self {
+        let total_s = total as f64 / fs;
+        let bar = (total_s > PROGRESS_AFTER_S)
+            .then(|| crate::report::progress(total.div_ceil(block as u64), "tracking"));
+        Self {
+            bar,
+            total_s,
+            next_line: 1,
+        }
+    }
+
+    /// After a block ending at `now` (s), with `active` satellites tracked.
+    fn advance(&mut self, now: f64, active: usize) {
+        let Some(bar) = &self.bar else {
+            return;
+        };
+        bar.inc(1);
+        if !bar.is_hidden() {
+            return;
+        }
+        let due = f64::from(self.next_line) / f64::from(PROGRESS_LINES) * self.total_s;
+        if now >= due && self.next_line <= PROGRESS_LINES {
+            eprintln!(
+                "track: {now:.1} of {:.1} s ({:.0} %), {active} satellite(s) tracked",
+                self.total_s,
+                100.0 * now / self.total_s
+            );
+            self.next_line += 1;
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
 }
 
 /// Runs every active channel's cross-correlation check against the others (their probes on

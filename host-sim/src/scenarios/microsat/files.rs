@@ -474,6 +474,18 @@ fn markdown(record: &FlightRecord, m: &FlightMetrics, title: &str, summary: &[St
             f.detail
         );
     }
+    let _ = writeln!(
+        s,
+        "\nThe receiver's reported σ against its error: {}.",
+        super::coverage_line("main flight", &m.coverage)
+    );
+    if let Some(c) = &m.fault_runs_coverage {
+        let _ = writeln!(
+            s,
+            "Over the separate fault runs (every antenna blocked beyond the coast limit, a faulty gyro; fast path from the start): {}.",
+            super::coverage_line("fault runs", c)
+        );
+    }
     let _ = writeln!(s, "\n## Plots\n");
     let _ = writeln!(s, "* [Attitude error with ±3σ and ±3× bound](microsat_attitude_error.png)\n\n  ![](microsat_attitude_error.png)\n");
     let _ = writeln!(

@@ -81,6 +81,58 @@ pub struct FlightMetrics {
     /// The converged receiver attitude split by input path: while the sample-level chain fed
     /// the receiver, and on the fast path after it.
     pub by_path: [PathStats; 2],
+    /// How often the reported σ covers the error, over every record with an attitude.
+    pub coverage: SigmaCoverage,
+    /// The same over the separate fault runs (`None`: none flown).
+    pub fault_runs_coverage: Option<SigmaCoverage>,
+}
+
+/// How often the receiver's reported σ covers its error: the records with an attitude whose
+/// error is within 3σ on every body axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SigmaCoverage {
+    /// Records with an attitude.
+    pub records: usize,
+    /// Of them, error within 3σ on every axis.
+    pub within_3sigma: usize,
+    /// Largest `|e_a| / σ_a` over the records and axes.
+    pub worst_ratio: f64,
+}
+
+impl SigmaCoverage {
+    /// The records of `samples` with an attitude.
+    pub fn of(samples: &[Sample]) -> Self {
+        let mut c = Self::default();
+        for s in samples.iter().filter(|s| has_attitude(s)) {
+            let ratio = (0..3)
+                .map(|a| s.error[a].abs() / s.sigma[a].max(1e-12))
+                .fold(0.0, f64::max);
+            c.records += 1;
+            c.within_3sigma += usize::from(ratio <= 3.0);
+            c.worst_ratio = c
+                .worst_ratio
+                .max(if ratio.is_nan() { f64::INFINITY } else { ratio });
+        }
+        c
+    }
+
+    /// Both sets of records together.
+    pub fn merge(self, other: Self) -> Self {
+        Self {
+            records: self.records + other.records,
+            within_3sigma: self.within_3sigma + other.within_3sigma,
+            worst_ratio: self.worst_ratio.max(other.worst_ratio),
+        }
+    }
+
+    /// The fraction within 3σ (NaN without records).
+    pub fn fraction(&self) -> f64 {
+        if self.records == 0 {
+            f64::NAN
+        } else {
+            self.within_3sigma as f64 / self.records as f64
+        }
+    }
 }
 
 /// The converged receiver attitude on one input path.
@@ -395,6 +447,8 @@ pub fn evaluate(record: &FlightRecord, duration: f64) -> FlightMetrics {
         line_bias: line_bias_stats(samples, from),
         tracked: tracked_counts(&after_fix),
         faults: Vec::new(),
+        coverage: SigmaCoverage::of(samples),
+        fault_runs_coverage: None,
         gyro_bias_error: (record.gyro_bias.1 - record.gyro_bias.0) * DEG_PER_H,
         gyro_bias_truth: record.gyro_bias.0 * DEG_PER_H,
     }
@@ -596,6 +650,128 @@ fn blockage(ev: &Events, b: &super::world::Blockage) -> FaultOutcome {
     }
 }
 
+/// The largest |error| (°) and `|e|/σ` of the records with an attitude in `[from, to)`.
+fn worst_in(ev: &Events, from: f64, to: f64) -> (f64, f64) {
+    let part: Vec<Sample> = ev
+        .record
+        .samples
+        .iter()
+        .filter(|s| s.t >= from && s.t < to)
+        .copied()
+        .collect();
+    let worst = part
+        .iter()
+        .filter(|s| has_attitude(s))
+        .map(|s| s.error.amax())
+        .fold(0.0f64, f64::max)
+        .to_degrees();
+    (worst, SigmaCoverage::of(&part).worst_ratio)
+}
+
+/// A loss reason as words.
+fn reason(e: &ReceiverEvent) -> String {
+    match e {
+        ReceiverEvent::AttitudeLost { reason, .. } => format!("{reason:?}"),
+        _ => String::new(),
+    }
+}
+
+/// Every antenna blocked for longer than the gyro may coast: the attitude is lost (fixes
+/// dropped, [`ReceiverEvent::AttitudeLost`]) and the cold start finds it again after the
+/// signals return; recovered when the fine attitude is back within 3σ.
+fn outage(ev: &Events, start: f64, end: f64) -> FaultOutcome {
+    let lost = ev
+        .record
+        .events
+        .iter()
+        .find(|(t, e)| {
+            *t >= start
+                && *t <= end + WINDOW.restored
+                && matches!(e, ReceiverEvent::AttitudeLost { .. })
+        })
+        .copied();
+    let first_fix = ev.find(end, f64::INFINITY, &|e| {
+        matches!(e, ReceiverEvent::FirstFix { .. })
+    });
+    let att = ev.recovery(end);
+    let (worst, ratio) = worst_in(ev, start, lost.map_or(end, |(t, _)| t));
+    FaultOutcome {
+        name: format!("every antenna blocked for {:.0} s", end - start),
+        detected: lost.is_some(),
+        recovered_s: att,
+        at_s: start,
+        detail: format!(
+            "gyro coast, largest error {worst:.4}° ({ratio:.1}σ); attitude lost {} s after the start; cold start: first fix {} s after the signals returned; fine attitude within 3σ after {} s",
+            lost.map_or("never".into(), |(t, e)| format!("{:.1} ({})", t - start, reason(&e))),
+            never_or(first_fix, |t| format!("{:.2}", t - end)),
+            never_or(att, |a| format!("{a:.1}"))
+        ),
+    }
+}
+
+/// A faulty gyro: excluded (detected) while it lies, used again after it agrees with the
+/// signals; recovered when it is used again and the fine attitude is within 3σ.
+fn gyro_fault(ev: &Events, f: &super::run::GyroFault) -> FaultOutcome {
+    use super::run::GyroFaultKind;
+    let excluded = ev.find(f.start, f.end + WINDOW.blocked, &|e| {
+        matches!(e, ReceiverEvent::GyroExcluded { .. })
+    });
+    let restored = ev.find(f.end, f64::INFINITY, &|e| {
+        matches!(e, ReceiverEvent::GyroRestored { .. })
+    });
+    let alarms = ev
+        .record
+        .events
+        .iter()
+        .filter(|(t, e)| {
+            *t >= f.start && *t <= f.end && matches!(e, ReceiverEvent::IntegrityAlarm { .. })
+        })
+        .count();
+    let att = ev.recovery(f.end);
+    let (worst, ratio) = worst_in(ev, f.start, f.end + WINDOW.restored);
+    let what = match f.kind {
+        GyroFaultKind::RateOffset(w) => {
+            format!(
+                "gyro {:.0} rad/s off",
+                (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
+            )
+        }
+        GyroFaultKind::Stuck => "gyro stuck at zero".into(),
+    };
+    let recovered = match excluded {
+        Some(_) => restored.zip(att).map(|(r, a)| (r - f.end).max(a)),
+        None => att,
+    };
+    FaultOutcome {
+        name: format!("{what} for {:.0} s", f.end - f.start),
+        detected: excluded.is_some(),
+        recovered_s: recovered,
+        at_s: f.start,
+        detail: format!(
+            "gyro excluded {} ms after the start ({alarms} integrity alarms); largest error until {:.0} s after the end {worst:.4}° ({ratio:.1}σ); gyro used again {} s after the end; fine attitude within 3σ after {} s",
+            never_or(excluded, |t| format!("{:.0}", (t - f.start) * 1e3)),
+            WINDOW.restored,
+            never_or(restored, |t| format!("{:.2}", t - f.end)),
+            never_or(att, |a| format!("{a:.1}"))
+        ),
+    }
+}
+
+/// The outcome of the faults of a separate fault run (outages and gyro faults).
+pub fn evaluate_fault_run(
+    record: &FlightRecord,
+    plan: &super::run::FaultPlan,
+) -> Vec<FaultOutcome> {
+    let ev = Events { record };
+    let mut out: Vec<FaultOutcome> = plan
+        .outages
+        .iter()
+        .map(|&(a, b)| outage(&ev, a, b))
+        .collect();
+    out.extend(plan.gyro_faults.iter().map(|f| gyro_fault(&ev, f)));
+    out
+}
+
 /// A one-cycle slip: found against the fine attitude and repaired.
 fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutcome {
     let (ts, antenna, prn) = (slip.start_s, slip.antenna, slip.prn);
@@ -680,4 +856,164 @@ pub fn evaluate_faults(
     out.extend(record.slips.iter().map(|s| cycle_slip(&ev, s)));
     out.extend(bit_flip(&ev, plan));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use gnss_attitude::receiver::LossReason;
+    use nalgebra::Matrix5;
+
+    use super::super::run::{FaultPlan, GyroFault, GyroFaultKind};
+    use super::*;
+
+    /// A record at `t` with an attitude from `source` (or none), error `e_sigmas` σ on x.
+    fn sample(t: f64, source: AttitudeSource, e_sigmas: f64) -> Sample {
+        let sigma = Vector3::repeat(1e-3);
+        Sample {
+            t,
+            source,
+            error: Vector3::new(e_sigmas * 1e-3, 0.0, 0.0),
+            sigma,
+            fine_error: Vector3::zeros(),
+            fine_locked: source == AttitudeSource::Fine,
+            loop_noise: sigma,
+            tracked: 8,
+            used: 8,
+            fixed: 8,
+            visible: 8,
+            blocked: [false; 3],
+            bias_error: Vector3::zeros(),
+            line_bias_error: [0.0; 2],
+            line_bias_sigma: [0.0; 2],
+            information: Matrix5::zeros(),
+            limit: sigma,
+        }
+    }
+
+    /// 10 Hz records over `[from, to)`.
+    fn records(from: f64, to: f64, source: AttitudeSource, e_sigmas: f64) -> Vec<Sample> {
+        let n = ((to - from) / 0.1).round() as usize;
+        (0..n)
+            .map(|k| sample(from + 0.1 * k as f64, source, e_sigmas))
+            .collect()
+    }
+
+    fn at(t: f64) -> u64 {
+        (t * 1e3) as u64
+    }
+
+    #[test]
+    fn a_faulty_gyro_reports_its_fault_only_inside_it() {
+        let f = GyroFault {
+            start: 60.0,
+            end: 70.0,
+            kind: GyroFaultKind::RateOffset([5.0, 0.0, -5.0]),
+        };
+        // 5 rad/s over 10 ms in 1e-5 rad pulses: 5000 more pulses
+        assert_eq!(f.apply(65.0, 0.01, [3, 4, 5], 1e-5), [5003, 4, -4995]);
+        assert_eq!(f.apply(70.0, 0.01, [3, 4, 5], 1e-5), [3, 4, 5]);
+        assert_eq!(f.apply(59.99, 0.01, [3, 4, 5], 1e-5), [3, 4, 5]);
+        let stuck = GyroFault {
+            kind: GyroFaultKind::Stuck,
+            ..f
+        };
+        assert_eq!(stuck.apply(60.0, 0.01, [3, 4, 5], 1e-5), [0; 3]);
+    }
+
+    #[test]
+    fn a_long_outage_is_detected_by_the_loss_and_recovered_by_the_cold_start() {
+        let (start, end) = (40.0, 190.0);
+        let mut samples = records(0.0, 40.0, AttitudeSource::Fine, 1.0);
+        samples.extend(records(40.0, 160.0, AttitudeSource::GyroCoast, 2.0));
+        samples.extend(records(160.0, 192.0, AttitudeSource::None, 0.0));
+        samples.extend(records(192.0, 193.0, AttitudeSource::Snapshot, 1.0));
+        samples.extend(records(193.0, 200.0, AttitudeSource::Fine, 1.0));
+        let lost = ReceiverEvent::AttitudeLost {
+            epoch: at(160.0),
+            reason: LossReason::CoastTooLong,
+        };
+        let fix = ReceiverEvent::FirstFix {
+            epoch: at(192.0),
+            satellites: 7,
+        };
+        let record = FlightRecord {
+            samples,
+            events: vec![(160.0, lost), (192.0, fix)],
+            ..FlightRecord::default()
+        };
+        let plan = FaultPlan {
+            outages: vec![(start, end)],
+            ..FaultPlan::default()
+        };
+        let out = evaluate_fault_run(&record, &plan);
+        assert_eq!(out.len(), 1);
+        assert!(out[0].detected, "{out:?}");
+        let r = out[0].recovered_s.unwrap();
+        assert!((r - 3.0).abs() < 0.05, "{r}");
+        assert!(out[0].detail.contains("CoastTooLong"), "{}", out[0].detail);
+        // no loss reported: not detected; never fine again: not recovered
+        let record = FlightRecord {
+            samples: records(0.0, 200.0, AttitudeSource::GyroCoast, 1.0),
+            ..FlightRecord::default()
+        };
+        let out = evaluate_fault_run(&record, &plan);
+        assert!(!out[0].detected && out[0].recovered_s.is_none(), "{out:?}");
+    }
+
+    #[test]
+    fn a_faulty_gyro_is_detected_by_its_exclusion_and_recovered_when_used_again() {
+        let f = GyroFault {
+            start: 60.0,
+            end: 70.0,
+            kind: GyroFaultKind::RateOffset([5.0, 0.0, 0.0]),
+        };
+        let mut samples = records(0.0, 60.3, AttitudeSource::Fine, 1.0);
+        // the error shows before the exclusion: 4σ for three records
+        samples.extend(records(60.3, 60.6, AttitudeSource::Fine, 4.0));
+        samples.extend(records(60.6, 100.0, AttitudeSource::Fine, 1.0));
+        let record = FlightRecord {
+            samples: samples.clone(),
+            events: vec![
+                (60.25, ReceiverEvent::GyroExcluded { epoch: at(60.25) }),
+                (75.0, ReceiverEvent::GyroRestored { epoch: at(75.0) }),
+            ],
+            ..FlightRecord::default()
+        };
+        let plan = FaultPlan {
+            gyro_faults: vec![f],
+            ..FaultPlan::default()
+        };
+        let out = evaluate_fault_run(&record, &plan);
+        assert!(out[0].detected, "{out:?}");
+        assert!((out[0].recovered_s.unwrap() - 5.0).abs() < 1e-9, "{out:?}");
+        assert!(out[0].detail.contains("250 ms"), "{}", out[0].detail);
+        assert!(out[0].detail.contains("(4.0σ)"), "{}", out[0].detail);
+        // never excluded: not detected, recovered when the attitude is within 3σ again
+        let record = FlightRecord {
+            samples,
+            ..FlightRecord::default()
+        };
+        let out = evaluate_fault_run(&record, &plan);
+        assert!(!out[0].detected, "{out:?}");
+        assert!(out[0].recovered_s.is_some_and(|r| r < 0.01), "{out:?}");
+    }
+
+    #[test]
+    fn the_sigma_coverage_counts_the_records_with_an_attitude() {
+        let mut s = records(0.0, 1.0, AttitudeSource::Fine, 1.0);
+        s[3].error.y = -3.5e-3;
+        s.extend(records(1.0, 2.0, AttitudeSource::None, 9.0));
+        let c = SigmaCoverage::of(&s);
+        assert_eq!((c.records, c.within_3sigma), (10, 9));
+        assert!((c.fraction() - 0.9).abs() < 1e-12);
+        assert!((c.worst_ratio - 3.5).abs() < 1e-9);
+        let both = c.merge(SigmaCoverage::of(&records(
+            0.0,
+            1.0,
+            AttitudeSource::Fine,
+            0.5,
+        )));
+        assert_eq!((both.records, both.within_3sigma), (20, 19));
+        assert!(SigmaCoverage::default().fraction().is_nan());
+    }
 }

@@ -40,6 +40,59 @@ pub struct FaultPlan {
     pub cycle_slips: Vec<(f64, usize)>,
     /// A data-bit transition at a wrong moment (time); applied to the highest satellite.
     pub bit_flip: Option<f64>,
+    /// Gyro faults: what the gyro reports over an interval instead of the truth.
+    pub gyro_faults: Vec<GyroFault>,
+    /// Outages: every antenna blocked over `(start, end)`, s.
+    pub outages: Vec<(f64, f64)>,
+}
+
+impl FaultPlan {
+    /// Whether the plan injects nothing.
+    pub fn is_empty(&self) -> bool {
+        self.blockages.is_empty()
+            && self.cycle_slips.is_empty()
+            && self.bit_flip.is_none()
+            && self.gyro_faults.is_empty()
+            && self.outages.is_empty()
+    }
+}
+
+/// A gyro fault over `[start, end)` (the samples whose interval starts inside it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GyroFault {
+    /// Start, s.
+    pub start: f64,
+    /// End, s.
+    pub end: f64,
+    /// What the gyro reports.
+    pub kind: GyroFaultKind,
+}
+
+/// What a faulty gyro reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GyroFaultKind {
+    /// The true rate plus this rate, body axes, rad/s (e.g. 5 rad/s on x).
+    RateOffset([f64; 3]),
+    /// Nothing: every increment zero (a stuck gyro).
+    Stuck,
+}
+
+impl GyroFault {
+    /// The pulses the faulty gyro reports for an interval starting at `t` with true pulses
+    /// `pulses` (pulse weight `weight`, rad; `h` the interval, s); `pulses` outside the fault.
+    pub fn apply(&self, t: f64, h: f64, pulses: [i32; 3], weight: f64) -> [i32; 3] {
+        if t < self.start || t >= self.end {
+            return pulses;
+        }
+        match self.kind {
+            GyroFaultKind::Stuck => [0; 3],
+            GyroFaultKind::RateOffset(w) => [0, 1, 2].map(|a| {
+                let extra = (w[a] * h / weight).round();
+                (f64::from(pulses[a]) + extra).clamp(f64::from(i32::MIN), f64::from(i32::MAX))
+                    as i32
+            }),
+        }
+    }
 }
 
 /// What a run does.
@@ -64,6 +117,8 @@ pub struct FlightConfig {
     /// The first stretch run through the sample-level chain ([`super::sample_level`]), s
     /// (0: the fast path from the start).
     pub sample_level_s: f64,
+    /// The attitude goes to the `--nmea` sink (the main flight; not the fault runs).
+    pub nmea: bool,
 }
 
 /// One record (every [`RECORD_S`]).
@@ -301,6 +356,13 @@ impl<'a> Flight<'a> {
             config.detumble_rates,
         );
         world.blockages = config.faults.blockages.clone();
+        for &(start, end) in &config.faults.outages {
+            world.blockages.extend((0..3).map(|antenna| Blockage {
+                antenna,
+                start,
+                end,
+            }));
+        }
         world.line_bias = LineBiasTruth::power_up(config.seed ^ LINE_BIAS_SEED_SALT);
         let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
         let rx = Box::new(
@@ -368,6 +430,12 @@ impl<'a> Flight<'a> {
             self.set_aiding(&e)?;
         }
         let tracked = self.observe(&e)?;
+        // an epoch without any observation on the fast path (every antenna blocked, nothing
+        // tracked) is closed by the flight computer's clock: the receiver coasts on the gyro
+        // and its limits apply
+        if tracked == 0 && !e.in_samples {
+            self.rx.receiver_mut().close_through(k);
+        }
         if (k + 1) % self.per_block == 0 {
             self.record_block(&e, tracked);
         }
@@ -403,7 +471,11 @@ impl<'a> Flight<'a> {
             let inc = self
                 .gyro
                 .increment(&self.world.motion, t0 - GYRO_H, GYRO_H, GYRO_SUBSAMPLES);
-            if let Some(p) = inc.pulses {
+            if let Some(mut p) = inc.pulses {
+                let weight = GyroErrors::mems().pulse_weight.unwrap_or(1.0);
+                for f in &self.config.faults.gyro_faults {
+                    p = f.apply(t0 - GYRO_H, GYRO_H, p, weight);
+                }
                 self.rx
                     .receiver_mut()
                     .push_gyro_pulses(p)
@@ -562,6 +634,7 @@ impl<'a> Flight<'a> {
             &self.gyro,
             &e.truths,
             tracked,
+            self.config.nmea,
         );
         while let Some(ev) = self.rx.receiver_mut().pop_event() {
             self.record
@@ -706,10 +779,13 @@ fn record_sample(
     gyro: &Gyro,
     truths: &[SatTruth],
     tracked: usize,
+    nmea: bool,
 ) {
     let att = receiver.attitude();
     let t = (att.epoch as f64 + 0.5) * EPOCH_S;
-    super::nmea::record(&att, world, t);
+    if nmea {
+        super::nmea::record(&att, world, t);
+    }
     let truth = world.motion.q_ib(t);
     let has = att.source != AttitudeSource::None;
     let (fine_error, fine_locked) = match receiver.fine_estimate() {
