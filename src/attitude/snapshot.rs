@@ -216,7 +216,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
     }
 
     /// The residuals of eq. (4) at the solution `c_rb`: χ² weighted by `(σ_j² Σ_B)⁻¹` (in the
-    /// units of σ², through `scale` = σ_min²) and the RMS range-difference residual, m.
+    /// units of σ², through `scale = σ_min²`) and the RMS range-difference residual, m.
     fn residuals(
         &self,
         c_rb: &Matrix3<T>,
