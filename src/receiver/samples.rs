@@ -308,7 +308,9 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
                         Err(ReceiverError::NoAiding) => {
                             report.without_aiding = report.without_aiding.saturating_add(1);
                         }
-                        Err(ReceiverError::StaleEpoch) => report.late = report.late.saturating_add(1),
+                        Err(ReceiverError::StaleEpoch) => {
+                            report.late = report.late.saturating_add(1)
+                        }
                         Err(e) => return Err(e),
                     }
                 }
@@ -322,7 +324,8 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         self.channels.retain(|(c, s)| {
             now.saturating_sub(s.last_lock_sample) < limit && !c.is_cross_correlation()
         });
-        report.released = u8::try_from(before.saturating_sub(self.channels.len())).unwrap_or(u8::MAX);
+        report.released =
+            u8::try_from(before.saturating_sub(self.channels.len())).unwrap_or(u8::MAX);
         report.cross_correlations = phantoms;
         Ok(report)
     }
