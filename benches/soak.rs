@@ -74,6 +74,9 @@ struct Tally {
     max_recovery_s: f64,
 }
 
+/// A call that must be refused: true when it was.
+type PoisonedCall = Box<dyn Fn(&mut AttitudeReceiver) -> bool>;
+
 struct Soak {
     flight: ExampleFlight,
     receiver: AttitudeReceiver,
@@ -193,7 +196,7 @@ impl Soak {
     fn poison(&mut self) {
         let k = self.k;
         let good: SatelliteObservation<f32> = self.flight.observations(k)[0];
-        let mut calls: Vec<Box<dyn Fn(&mut AttitudeReceiver) -> bool>> = Vec::new();
+        let mut calls: Vec<PoisonedCall> = Vec::new();
         for (i, v) in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY]
             .into_iter()
             .enumerate()

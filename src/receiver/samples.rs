@@ -309,7 +309,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
                             report.without_aiding = report.without_aiding.saturating_add(1);
                         }
                         Err(ReceiverError::StaleEpoch) => {
-                            report.late = report.late.saturating_add(1)
+                            report.late = report.late.saturating_add(1);
                         }
                         Err(e) => return Err(e),
                     }
