@@ -614,3 +614,62 @@ fn unknown_line_biases_cancel_in_double_differences_and_come_back_with_the_fix()
     assert!(rate >= 0.75, "success rate {rate}");
     assert!(wrong <= 1, "{wrong} wrong fixes in {epochs}");
 }
+
+/// Issue 15: with σ ≤ 1e-30 m the solver returned `Ok` with χ² = ∞ and an all-zero
+/// covariance (σ² underflows to 0 in f32). Whatever σ, a solution is now either refused or
+/// has a finite χ² and a covariance positive on its diagonal.
+#[test]
+fn a_tiny_sigma_never_gives_an_infinite_chi_square_or_a_zero_covariance() {
+    let (_, s32) = solvers();
+    let b = triangle();
+    let sky = [
+        los(60.0, 0.0),
+        los(45.0, 120.0),
+        los(30.0, 240.0),
+        los(20.0, 60.0),
+    ];
+    let truth = rot_z(0.3) * rot_y(-0.2);
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    let mut refused = 0;
+    for sigma in [1e-30, 1e-38, 1e-44, 1e-20, 1e-12, 1e-3] {
+        // nearly noise-free range differences (1 nm): only σ is extreme
+        let (_, o32) = ranges(&b, &truth, &sky, &[1e-9; 4], &mut rng);
+        let mut obs = RangeDifferences::<2, 12, f32>::new();
+        for s in o32.satellites() {
+            obs.push(SatelliteRanges { sigma, ..*s }).unwrap();
+        }
+        match s32.solve(&obs) {
+            Ok(sol) => {
+                assert!(
+                    sol.chi_square.is_finite(),
+                    "σ {sigma}: χ² {}",
+                    sol.chi_square
+                );
+                assert!(
+                    (0..3).all(|i| sol.covariance[(i, i)] > 0.0)
+                        && sol.covariance.iter().all(|v| v.is_finite()),
+                    "σ {sigma}: covariance {:?}",
+                    sol.covariance
+                );
+            }
+            Err(e) => {
+                assert!(
+                    matches!(e, SnapshotError::InvalidNoise | SnapshotError::Numerical),
+                    "σ {sigma}: {e:?}"
+                );
+                refused += 1;
+            }
+        }
+    }
+    // σ = 1e-30, 1e-38 and 1e-44 m square to zero in f32: refused; 1 mm is an ordinary fix
+    assert!(refused >= 3, "refused {refused}");
+    let mut obs = RangeDifferences::<2, 12, f32>::new();
+    let (_, o32) = ranges(&b, &truth, &sky, &[1e-9; 4], &mut rng);
+    for s in o32.satellites() {
+        obs.push(SatelliteRanges { sigma: 1e-30, ..*s }).unwrap();
+    }
+    assert_eq!(
+        s32.solve(&obs).map(|_| ()),
+        Err(SnapshotError::InvalidNoise)
+    );
+}

@@ -151,7 +151,10 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
     /// geometry that cannot separate the baseline components; [`SnapshotError::NotConverged`]
     /// if Wahba's eigen-decomposition fails; [`SnapshotError::CollinearBaselines`] if the
     /// estimated reference baselines are parallel; [`SnapshotError::Numerical`] if the
-    /// Gauss–Newton normal matrix is singular. Input values were validated on insertion.
+    /// Gauss–Newton normal matrix is singular, or when χ² or the covariance is not finite
+    /// or the covariance not positive on its diagonal; [`SnapshotError::InvalidNoise`] when
+    /// the smallest σ squares to zero or infinity in `T` (σ below about 4e-23 m in `f32`). Input values
+    /// were validated on insertion. Never `Ok` with a non-finite statistic.
     pub fn solve<const N: usize>(
         &self,
         obs: &RangeDifferences<M, N, T>,
@@ -170,6 +173,12 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
                     }
                 });
         let scale = sigma_min * sigma_min;
+        // σ_min² must be positive and finite: a σ of 1e-30 m squares to 0 in f32, and χ² and
+        // the covariance would then be ∞ and 0 (a σ² that is barely positive is caught by the
+        // checks of the outputs below).
+        if !(scale > T::zero() && scale.is_finite()) {
+            return Err(SnapshotError::InvalidNoise);
+        }
         let weight = |sigma: T| {
             let r = sigma_min / sigma;
             r * r
@@ -199,7 +208,11 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             SnapshotQuality::Good
         };
         let euler = Euler321::from_dcm(&c_rb)?;
-        if !(covariance.iter().all(|v| v.is_finite()) && residual_rms.is_finite()) {
+        let positive = (0..3).all(|i| covariance[(i, i)] > T::zero());
+        let finite = covariance.iter().all(|v| v.is_finite())
+            && residual_rms.is_finite()
+            && chi_square.is_finite();
+        if !(positive && finite) {
             return Err(SnapshotError::Numerical);
         }
         Ok(SnapshotSolution {

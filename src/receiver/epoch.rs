@@ -18,6 +18,11 @@ use super::{AttitudeReceiver, ReceiverError, ReceiverEvent, MAX_SATELLITES};
 /// windows to an epoch.
 pub(crate) const EPOCH_HEADROOM: u64 = 1 << 40;
 
+/// The last epoch the receiver accepts or closes ([`AttitudeReceiver::close_through`] stops
+/// there), so that `open = closed + 1` never saturates and a closed epoch is never opened
+/// again.
+pub(crate) const MAX_EPOCH: u64 = u64::MAX - EPOCH_HEADROOM;
+
 /// Largest C/N0 an observation may claim, dB-Hz.
 const MAX_CN0_DBHZ: f32 = 90.0;
 
@@ -82,7 +87,7 @@ impl EpochBuffer {
     /// Whether an observation of `epoch` is accepted, and through which epoch the receiver
     /// must close first.
     pub fn admit(&self, epoch: u64) -> Result<Option<u64>, ReceiverError> {
-        if epoch > u64::MAX - EPOCH_HEADROOM {
+        if epoch > MAX_EPOCH {
             return Err(ReceiverError::EpochOutOfRange);
         }
         if !self.started {
@@ -133,6 +138,7 @@ impl EpochBuffer {
     /// The last epoch one close call steps: `epoch`, capped at a window past the oldest open
     /// one; `None` before the first observation or when nothing is due.
     pub fn plan_close(&self, epoch: u64) -> Option<u64> {
+        let epoch = epoch.min(MAX_EPOCH);
         if !self.started || epoch < self.open {
             return None;
         }
@@ -164,10 +170,12 @@ impl EpochBuffer {
     /// After a close call: when `epoch` is still ahead (the jump exceeded a window), the empty
     /// epochs in between are skipped; returns the length of the skip, in epochs.
     pub fn skip_to(&mut self, epoch: u64) -> Option<u64> {
+        let epoch = epoch.min(MAX_EPOCH);
         if !self.started || epoch < self.open {
             return None;
         }
-        let skipped = epoch - self.open + 1;
+        // (epoch ≥ open, and open ≥ 1 once an epoch was closed: no overflow either way)
+        let skipped = (epoch - self.open).saturating_add(1);
         self.open = epoch.saturating_add(1);
         self.closed = Some(epoch);
         self.reset(self.open);

@@ -143,7 +143,8 @@ impl ExampleFlight {
         for (i, (prn, _, _)) in SKY.iter().enumerate() {
             let los = Self::los(i);
             // data bit: a new pseudo-random bit every 20 epochs
-            let bit_index = (epoch + 7 * i as u64) / 20;
+            // (saturating: the flight is defined for every epoch, up to u64::MAX)
+            let bit_index = epoch.saturating_add(7u64.saturating_mul(i as u64)) / 20;
             let mut bit = if (bit_index.wrapping_mul(0x9E37_79B9) >> 7) & 1 == 0 {
                 1.0
             } else {
@@ -231,7 +232,7 @@ impl ExampleFlight {
             }
             if receiver.config().gyro.is_some() && k > 0 && k.checked_rem(per_gyro) == Some(0) {
                 receiver.push_gyro_increment(
-                    &self.gyro_increment(k.checked_div(per_gyro).unwrap_or(1) - 1),
+                    &self.gyro_increment(k.checked_div(per_gyro).unwrap_or(1).saturating_sub(1)),
                 )?;
             }
             for o in self.observations(k).iter() {

@@ -468,7 +468,9 @@ impl AttitudeReceiver {
     /// Closes every open epoch up to and including `epoch`: steps the stages. Epochs without
     /// observations are stepped too (the fine filter predicts). A jump of more than a window
     /// skips the empty epochs in between; a jump longer than the coast limit loses the
-    /// attitude ([`LossReason::EpochJump`]).
+    /// attitude ([`LossReason::EpochJump`]). An epoch beyond the last one
+    /// [`Self::push_observation`] accepts (within 2⁴⁰ of `u64::MAX`) closes through that one:
+    /// a closed epoch is never opened again.
     pub fn close_through(&mut self, epoch: u64) {
         let Some(limit) = self.epochs.plan_close(epoch) else {
             return;

@@ -274,7 +274,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         let mut cursors = [0usize; S];
         let mut end = 0usize;
         while end < block.len() {
-            end = (end + slice).min(block.len());
+            end = end.saturating_add(slice).min(block.len());
             // the block up to this slice's end, shared by every channel
             let sub = sub_block(block, end)?;
             for ((channel, status), cursor) in self.channels.iter_mut().zip(cursors.iter_mut()) {
@@ -286,7 +286,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
                     let Some(epoch) = channel.process(&sub, cursor)? else {
                         continue;
                     };
-                    report.epochs += 1;
+                    report.epochs = report.epochs.saturating_add(1);
                     status.state = epoch.state;
                     status.cn0_dbhz = epoch.cn0_dbhz;
                     status.locked = epoch.state == ChannelState::Tracking
@@ -304,9 +304,13 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
                         continue;
                     };
                     match self.receiver.push_observation(k, &obs) {
-                        Ok(()) => report.observations += 1,
-                        Err(ReceiverError::NoAiding) => report.without_aiding += 1,
-                        Err(ReceiverError::StaleEpoch) => report.late += 1,
+                        Ok(()) => report.observations = report.observations.saturating_add(1),
+                        Err(ReceiverError::NoAiding) => {
+                            report.without_aiding = report.without_aiding.saturating_add(1);
+                        }
+                        Err(ReceiverError::StaleEpoch) => {
+                            report.late = report.late.saturating_add(1);
+                        }
                         Err(e) => return Err(e),
                     }
                 }
@@ -320,7 +324,8 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         self.channels.retain(|(c, s)| {
             now.saturating_sub(s.last_lock_sample) < limit && !c.is_cross_correlation()
         });
-        report.released = before.saturating_sub(self.channels.len()) as u8;
+        report.released =
+            u8::try_from(before.saturating_sub(self.channels.len())).unwrap_or(u8::MAX);
         report.cross_correlations = phantoms;
         Ok(report)
     }

@@ -462,3 +462,81 @@ fn a_faulty_gyro_is_excluded_and_the_reported_sigma_keeps_covering_the_error() {
         assert!(!r.health().gyro_excluded, "{name}: still excluded");
     }
 }
+
+/// Issue 15: `ExampleFlight::observations(u64::MAX)` overflowed (`epoch + 7 i`, the data
+/// bit's index). The flight is now defined for every epoch: eight finite observations.
+#[test]
+fn example_flight_observations_at_u64_max_do_not_overflow() {
+    let mut f = ExampleFlight::new(4);
+    for epoch in [u64::MAX, u64::MAX - 1, u64::MAX - 20] {
+        let obs = f.observations(epoch);
+        assert_eq!(obs.len(), 8, "epoch {epoch}");
+        for o in obs.iter() {
+            let values = o.prompt.i.iter().chain(o.prompt.q.iter());
+            assert!(values.copied().all(f32::is_finite), "epoch {epoch}: {o:?}");
+        }
+        let q = f.attitude(epoch);
+        assert!([q.w, q.x, q.y, q.z].iter().all(|v| v.is_finite()));
+    }
+}
+
+/// Issue 15: epochs near `u64::MAX` overflowed in the epoch buffer (`epoch + 1`,
+/// `first + 1`, `open + window_epochs`): with overflow checks a panic, in release a wrap
+/// that defeated the stale-epoch guard. Now an epoch beyond [`super::epoch::MAX_EPOCH`] is
+/// refused, closing stops at that epoch, and every closed epoch stays closed.
+#[test]
+fn epochs_near_u64_max_neither_overflow_nor_reopen_a_closed_epoch() {
+    use super::epoch::MAX_EPOCH;
+    for gyro in [false, true] {
+        let mut f = ExampleFlight::new(6);
+        let mut r = AttitudeReceiver::new(ExampleFlight::config(gyro)).unwrap();
+        r.set_aiding(&f.aiding(0)).unwrap();
+        let obs = f.observations(0)[0];
+        for e in [u64::MAX, u64::MAX - 1, MAX_EPOCH + 1] {
+            assert_eq!(
+                r.push_observation(e, &obs),
+                Err(ReceiverError::EpochOutOfRange)
+            );
+        }
+        assert_eq!(r.epoch(), None);
+        for e in MAX_EPOCH - 3..=MAX_EPOCH {
+            for o in f.observations(e).iter() {
+                r.push_observation(e, o).unwrap();
+            }
+        }
+        // closing through u64::MAX stops at the last epoch the receiver accepts
+        r.close_through(u64::MAX);
+        assert_eq!(r.epoch(), Some(MAX_EPOCH), "gyro {gyro}");
+        let before = r.attitude();
+        r.close_through(u64::MAX);
+        r.close_through(MAX_EPOCH);
+        assert_eq!(r.epoch(), Some(MAX_EPOCH));
+        assert_eq!(r.attitude(), before);
+        // the stale-epoch guard holds at the top: every closed epoch is refused
+        for e in [MAX_EPOCH, MAX_EPOCH - 1, MAX_EPOCH - 3, 0] {
+            assert_eq!(
+                r.push_observation(e, &obs),
+                Err(ReceiverError::StaleEpoch),
+                "epoch {e}"
+            );
+        }
+        let q = r.attitude().q_rb;
+        assert!([q.w, q.x, q.y, q.z].iter().all(|v| v.is_finite()));
+    }
+    // a receiver in flight, then a jump to the top: the earlier epochs stay closed
+    let mut f = ExampleFlight::new(6);
+    let mut r = AttitudeReceiver::new(ExampleFlight::config(true)).unwrap();
+    f.fly(&mut r, 0, 1000).unwrap();
+    assert_eq!(r.attitude().source, AttitudeSource::Fine);
+    let obs = f.observations(MAX_EPOCH)[0];
+    r.push_observation(MAX_EPOCH, &obs).unwrap();
+    r.close_through(u64::MAX);
+    assert_eq!(r.epoch(), Some(MAX_EPOCH));
+    assert_eq!(
+        r.push_observation(999, &obs),
+        Err(ReceiverError::StaleEpoch)
+    );
+    assert!(events(&mut r)
+        .iter()
+        .any(|e| matches!(e, ReceiverEvent::AttitudeLost { .. })));
+}

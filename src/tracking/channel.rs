@@ -244,13 +244,17 @@ impl<const A: usize> Channel<A> {
     /// sample at the acquired Doppler.
     ///
     /// # Errors
-    /// [`TrackingError::WrongPrn`] for another PRN's result, [`TrackingError::NonFinite`].
+    /// [`TrackingError::WrongPrn`] for another PRN's result, [`TrackingError::NonFinite`],
+    /// [`TrackingError::DopplerOutOfRange`] beyond [`MAX_HANDOVER_DOPPLER_HZ`].
     pub fn start(&mut self, acquisition: &SearchResult) -> Result<(), TrackingError> {
         if acquisition.prn != self.prn() {
             return Err(TrackingError::WrongPrn);
         }
         if !(acquisition.doppler_hz.is_finite() && acquisition.code_phase_chips.is_finite()) {
             return Err(TrackingError::NonFinite);
+        }
+        if !(acquisition.doppler_hz.abs() <= MAX_HANDOVER_DOPPLER_HZ) {
+            return Err(TrackingError::DopplerOutOfRange);
         }
         self.pending = Some(*acquisition);
         self.state = ChannelState::Refining;
@@ -566,6 +570,10 @@ fn cn0_of(e: &WindowEstimate, t: f32, long_window: bool) -> Cn0Estimate {
     }
 }
 
+/// Largest Doppler a hand-over ([`Channel::start`]) may carry, Hz: twice the ±50 kHz a
+/// receiver in low Earth orbit sees.
+pub const MAX_HANDOVER_DOPPLER_HZ: f32 = 100_000.0;
+
 /// Errors of the tracking channel ([`crate::tracking::channel`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -586,13 +594,19 @@ pub enum TrackingError {
     /// The correlator refused a configuration, NCO setting or block.
     #[error("correlator refused")]
     Signal(#[from] SignalError),
+    /// A hand-over's Doppler is beyond [`MAX_HANDOVER_DOPPLER_HZ`] (no GNSS signal seen from
+    /// a satellite in orbit has it; the NCOs could not be set).
+    #[error("hand-over Doppler out of range")]
+    DopplerOutOfRange,
 }
 
 impl Error for TrackingError {
     fn kind(&self) -> ErrorKind {
         match self {
             Self::NonFinite => ErrorKind::NonFinite,
-            Self::InvalidConfig | Self::NotStarted | Self::WrongPrn => ErrorKind::InvalidInput,
+            Self::InvalidConfig | Self::NotStarted | Self::WrongPrn | Self::DopplerOutOfRange => {
+                ErrorKind::InvalidInput
+            }
             Self::Signal(e) => e.kind(),
         }
     }

@@ -114,29 +114,35 @@ pub struct AcquisitionConfig {
 }
 
 impl AcquisitionConfig {
-    /// Number of Doppler bins.
+    /// Number of Doppler bins: `2 ⌊doppler_max_hz / doppler_step_hz⌋ + 1`, saturating at
+    /// `usize::MAX` for a span no search could cover (validation then refuses it); 0 for a
+    /// non-finite or negative ratio.
     pub fn doppler_bins(&self) -> usize {
         let half = libm::floorf(self.doppler_max_hz / self.doppler_step_hz);
         if half.is_finite() && half >= 0.0 {
-            2 * half as usize + 1
+            // (the cast saturates; so do the sums)
+            (half as usize).saturating_mul(2).saturating_add(1)
         } else {
             0
         }
     }
 
-    /// Samples a search with its verification dwell reads: `2K` ms (rounded up) plus one.
+    /// Samples a search with its verification dwell reads: `2K` ms (rounded up) plus one;
+    /// saturating at `usize::MAX` for a sample rate no buffer could hold (validation then
+    /// refuses it).
     pub fn samples_needed(&self) -> usize {
         self.samples_for_ms(2 * u32::from(self.noncoherent_ms))
     }
 
     /// Samples the search alone reads (no verification dwell: candidates are not detected):
-    /// `K` ms (rounded up) plus one.
+    /// `K` ms (rounded up) plus one; saturating as [`Self::samples_needed`].
     pub fn search_samples(&self) -> usize {
         self.samples_for_ms(u32::from(self.noncoherent_ms))
     }
 
     fn samples_for_ms(&self, ms: u32) -> usize {
-        libm::ceil(f64::from(ms) * self.sample_rate_hz * 1e-3) as usize + 1
+        // (the cast saturates, NaN to 0; so does the sum)
+        (libm::ceil(f64::from(ms) * self.sample_rate_hz * 1e-3) as usize).saturating_add(1)
     }
 
     /// First sample of millisecond `m` of the searched samples.
@@ -537,6 +543,49 @@ mod tests {
             engine().search(prn(7), &i[..n - 1], Some(&q[..n - 1]), 0, &config()),
             Err(AcquisitionError::NotEnoughSamples)
         );
+    }
+
+    /// Issue 15: `doppler_max_hz: 1e30` made `doppler_bins()` overflow (`2 · usize::MAX`);
+    /// the count now saturates and the search refuses the configuration.
+    #[test]
+    fn a_huge_doppler_span_does_not_overflow_doppler_bins() {
+        let huge = AcquisitionConfig {
+            doppler_max_hz: 1e30,
+            ..config()
+        };
+        assert_eq!(huge.doppler_bins(), usize::MAX);
+        let n = config().samples_needed();
+        let (i, q) = (std::vec![1i8; n], std::vec![-1i8; n]);
+        assert_eq!(
+            engine().search(prn(3), &i, Some(&q), 0, &huge),
+            Err(AcquisitionError::InvalidConfig)
+        );
+        assert_eq!(config().doppler_bins(), 5);
+    }
+
+    /// Issue 15: `samples_needed()` overflowed for a sample rate of +∞ (`usize::MAX + 1`); it
+    /// now saturates (NaN gives 1) and the search refuses the configuration.
+    #[test]
+    fn an_infinite_sample_rate_does_not_overflow_samples_needed() {
+        let inf = AcquisitionConfig {
+            sample_rate_hz: f64::INFINITY,
+            ..config()
+        };
+        assert_eq!(inf.samples_needed(), usize::MAX);
+        assert_eq!(inf.search_samples(), usize::MAX);
+        let nan = AcquisitionConfig {
+            sample_rate_hz: f64::NAN,
+            ..config()
+        };
+        assert_eq!(nan.samples_needed(), 1);
+        let n = config().samples_needed();
+        let (i, q) = (std::vec![1i8; n], std::vec![-1i8; n]);
+        for bad in [inf, nan] {
+            assert_eq!(
+                engine().search(prn(3), &i, Some(&q), 0, &bad),
+                Err(AcquisitionError::NonFinite)
+            );
+        }
     }
 
     /// Constant, saturated and silent inputs detect nothing for any PRN; a DC offset on a
