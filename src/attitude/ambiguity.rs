@@ -986,10 +986,8 @@ impl Error for AmbiguityError {
 }
 #[cfg(test)]
 mod tests {
-    extern crate std;
     use super::*;
     use crate::attitude::example;
-    use std::eprintln;
 
     fn resolver_f64(ratio_nodes: u32) -> AmbiguityResolver<2, f64> {
         let b = example::baselines().unwrap();
@@ -1066,10 +1064,6 @@ mod tests {
                     "n {n} seed {seed}: {} vs {}",
                     fix.ratio,
                     reference.ratio
-                );
-                eprintln!(
-                    "n {n} seed {seed}: ratio {:.2} (first search: {:.2}, lower bound {}), nodes {} vs {}",
-                    fix.ratio, first.ratio, first.ratio_is_lower_bound, fix.nodes, first.nodes
                 );
             }
         }

@@ -250,10 +250,12 @@ impl BitDecoder {
 
 #[cfg(test)]
 mod tests {
-    extern crate std;
-    use std::vec::Vec;
+    use heapless::Vec;
 
     use super::*;
+
+    /// Room for one bit per 20 ms of the longest run (20 s).
+    const BITS: usize = 1024;
 
     /// xorshift for reproducible bits and noise.
     struct Rng(u64);
@@ -273,7 +275,7 @@ mod tests {
         }
     }
 
-    type Run = (Option<u8>, Vec<DataBit>, Vec<(u64, bool)>);
+    type Run = (Option<u8>, Vec<DataBit, BITS>, Vec<(u64, bool), BITS>);
 
     fn run(amplitude: f32, edge: u64, epochs: u64, seed: u64) -> Run {
         let mut rng = Rng(seed);
@@ -284,11 +286,11 @@ mod tests {
         for k in 0..epochs {
             if k % 20 == edge {
                 value = rng.next() & 1 == 1;
-                truth.push((1000 + k, value));
+                truth.push((1000 + k, value)).expect("room for every bit");
             }
             let s = if value { amplitude } else { -amplitude };
             if let Some(b) = dec.push(1000 + k, s + rng.normal()).unwrap() {
-                bits.push(b);
+                bits.push(b).expect("room for every bit");
             }
         }
         (dec.edge(), bits, truth)

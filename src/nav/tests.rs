@@ -2,9 +2,12 @@
 //! satellite positions, the single-point fix on synthesized pseudoranges and Dopplers, the
 //! residual check, the LEO filter through an outage, lines of sight and the store.
 
-extern crate std;
+use heapless::Vec;
 
-use std::vec::Vec;
+/// Room for the test constellation's satellites and their observations.
+const SATS: usize = 32;
+/// Room for the LEO truth's 0.1 s steps (the longest run is 420 s).
+const TRUTH_STEPS: usize = 4400;
 
 use nalgebra::{Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -70,7 +73,7 @@ fn reference_relativistic(e: &Ephemeris, t: &GpsTime) -> f64 {
 }
 
 /// A constellation of 24 plausible satellites (six planes) with harmonic terms and clocks.
-fn constellation(seed: u64, week: u16, toe_s: f64) -> Vec<Ephemeris> {
+fn constellation(seed: u64, week: u16, toe_s: f64) -> Vec<Ephemeris, SATS> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..24u8)
         .map(|k| {
@@ -150,9 +153,6 @@ fn satellite_positions_match_the_independent_reference_to_a_centimetre() {
             assert!((rate_fd - s.clock_rate).abs() < 1e-15);
         }
     }
-    std::println!(
-        "satellite position vs reference: worst {worst:e} m, relativistic {worst_clock:e} s"
-    );
     assert!(worst < 0.01, "{worst} m");
     assert!(worst_clock < 1e-13);
 }
@@ -304,8 +304,8 @@ fn ground_observations(
     noise_m: f64,
     count: usize,
     rng: &mut ChaCha8Rng,
-) -> Vec<Observation> {
-    let mut sky: Vec<(f64, &Ephemeris)> = ephs
+) -> Vec<Observation, SATS> {
+    let mut sky: Vec<(f64, &Ephemeris), SATS> = ephs
         .iter()
         .map(|e| (elevation(e, &rx.position, rx_time), e))
         .filter(|(el, _)| *el > 10f64.to_radians())
@@ -349,12 +349,6 @@ fn a_noise_free_fix_is_exact_and_a_noisy_one_is_within_its_covariance() {
     )
     .unwrap();
     let err = position_error(&fix, &rx).norm();
-    std::println!(
-        "noise-free fix: error {err:e} m, clock {:e} m, pdop {:.2}, iterations {}",
-        fix.clock_bias_m - rx.clock_bias_m,
-        fix.dop.pdop,
-        fix.iterations
-    );
     assert!(err < 0.02, "{err}");
     assert!((fix.clock_bias_m - rx.clock_bias_m).abs() < 0.02);
     assert!((fix.time.seconds_since(&at)).abs() < 1e-10);
@@ -386,10 +380,6 @@ fn a_noise_free_fix_is_exact_and_a_noisy_one_is_within_its_covariance() {
     let nees = nees_sum / f64::from(n);
     let rms = (rms / f64::from(n)).sqrt();
     let pdop_rms = (pdop2 / f64::from(n)).sqrt();
-    std::println!(
-        "3 m noise, up to 8 satellites: 3-D position error RMS {rms:.2} m (σ·PDOP_rms = {:.2} m), mean NEES {nees:.2} (3 expected)",
-        3.0 * pdop_rms
-    );
     assert!(nees > 2.0 && nees < 4.2, "{nees}");
     assert!(rms < 1.3 * 3.0 * pdop_rms, "{rms} vs {pdop_rms}");
 }
@@ -427,7 +417,7 @@ fn the_residual_check_excludes_a_biased_satellite() {
     let pulled = solve(&obs, &ephs[..], Some(&iono), &rx_clock, None, &blind).unwrap();
     assert!(position_error(&pulled, &rx).norm() > err);
     // five satellites: detected, not isolated
-    let five: Vec<Observation> = obs.iter().take(5).copied().collect();
+    let five: Vec<Observation, SATS> = obs.iter().take(5).copied().collect();
     let five = if five.iter().any(|o| o.prn == biased) {
         five
     } else {
@@ -512,7 +502,7 @@ fn truth_acceleration(r: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
 /// Inertial truth at 0.1 s steps (RK4), in the ECEF frame at `gps0` + `t`: ECEF = `R_z(−ω t)`
 /// ECI (the frames coincide at `t = 0`).
 struct LeoTruth {
-    eci: Vec<(Vector3<f64>, Vector3<f64>)>,
+    eci: Vec<(Vector3<f64>, Vector3<f64>), TRUTH_STEPS>,
     step: f64,
 }
 
@@ -528,7 +518,7 @@ impl LeoTruth {
         let mut eci = Vec::new();
         let steps = (seconds / step).round() as usize;
         for _ in 0..=steps {
-            eci.push((r, v));
+            eci.push((r, v)).expect("room for every step");
             let f = |r: &Vector3<f64>, v: &Vector3<f64>| (*v, truth_acceleration(r, v));
             let (k1r, k1v) = f(&r, &v);
             let (k2r, k2v) = f(&(r + k1r * step / 2.0), &(v + k1v * step / 2.0));
@@ -622,10 +612,6 @@ fn the_leo_filter_coasts_through_a_60_s_outage() {
     let (p, v) = truth.ecef(360.0);
     let after = (Vector3::from(state.position_m) - p).norm();
     let after_v = (Vector3::from(state.velocity_m_s) - v).norm();
-    std::println!(
-        "LEO filter: before the outage {before:.2} m / {before_v:.3} m/s; after 60 s {after:.2} m / {after_v:.3} m/s (σ {:.2} m); worst {worst:.2} m",
-        state.position_sigma_m
-    );
     assert!(after < 10.0, "{after}");
     assert!(after < 3.0 * f64::from(state.position_sigma_m) + 1.0);
     // the fixes come back and are accepted
@@ -661,7 +647,7 @@ fn a_leo_receiver_fixes_without_atmosphere_and_its_filter_follows() {
         let along = (-p.dot(&d)).max(0.0);
         (p + d * along).norm() > LEO_R + 100e3
     };
-    let obs: Vec<Observation> = ephs
+    let obs: Vec<Observation, SATS> = ephs
         .iter()
         .filter(|e| clear(e))
         .take(10)
@@ -681,11 +667,6 @@ fn a_leo_receiver_fixes_without_atmosphere_and_its_filter_follows() {
     let v = fix.velocity_m_s.unwrap();
     let verr =
         (Vector3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2])) - rx.velocity).norm();
-    std::println!(
-        "LEO fix: {} satellites, error {err:.2} m, velocity error {verr:.3} m/s, pdop {:.2}",
-        fix.satellites,
-        fix.dop.pdop
-    );
     assert!(err < 6.0 * f64::from(fix.dop.pdop), "{err}");
     assert!(verr < 0.1, "{verr}");
     assert!(OrbitFilter::from_fix(&fix, OrbitFilterConfig::default()).is_ok());
@@ -946,14 +927,15 @@ fn the_example_decodes_and_fixes() {
     for b in [false, true, true, false, false, false] {
         assert_eq!(push(&mut sync, b, &mut epoch), Ok(None));
     }
-    let mut got = Vec::new();
+    let mut got: Vec<_, 3> = Vec::new();
     for id in 1..=3u8 {
         let bits = subframe_bits(&subframe_words(&ephs[6], id, 39_600 + u32::from(id)));
         for (i, &b) in bits.iter().enumerate() {
             let r = push(&mut sync, b, &mut epoch);
             assert!(r.is_ok(), "subframe {id} bit {i}: {r:?}");
             if let Some(sf) = r.unwrap() {
-                got.push(store.add_subframe(7, &sf).unwrap());
+                got.push(store.add_subframe(7, &sf).unwrap())
+                    .expect("three subframes");
             }
         }
     }
