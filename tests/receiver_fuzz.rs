@@ -5,6 +5,8 @@
 //! were; the attitude stays finite; and the valid signals bring a fine attitude back within
 //! 20 s, close to the truth — never stuck, never confidently wrong.
 
+mod common;
+
 use gnss_attitude::attitude::one_stage::{PromptIq, SatelliteObservation};
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeReceiver, AttitudeSource, SatelliteAiding};
@@ -34,17 +36,7 @@ enum Call {
 
 /// A float that is sometimes ordinary and often poisoned.
 fn float() -> impl Strategy<Value = f32> {
-    prop_oneof![
-        3 => -2.0f32..2.0,
-        1 => Just(f32::NAN),
-        1 => Just(f32::INFINITY),
-        1 => Just(f32::NEG_INFINITY),
-        1 => Just(f32::MAX),
-        1 => Just(f32::MIN_POSITIVE),
-        1 => Just(1e30f32),
-        1 => Just(-1e-30f32),
-        1 => Just(0.0f32),
-    ]
+    common::poisoned_float()
 }
 
 /// An epoch offset from the receiver's current epoch: mostly near, sometimes far back or an

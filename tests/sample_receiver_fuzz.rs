@@ -7,6 +7,8 @@
 //! observable state (attitude, health, epoch, channels) as it was; no output is non-finite;
 //! and afterwards valid observations bring the receiver to a fine attitude.
 
+mod common;
+
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{
     AttitudeSource, ChannelStatus, ReceiverAttitude, ReceiverHealth, SampleFrontConfig,
@@ -31,16 +33,7 @@ fn front_config() -> SampleFrontConfig {
 
 /// A float that is sometimes ordinary and often poisoned.
 fn float() -> impl Strategy<Value = f32> {
-    prop_oneof![
-        3 => -2.0f32..2.0,
-        1 => Just(f32::NAN),
-        1 => Just(f32::INFINITY),
-        1 => Just(f32::NEG_INFINITY),
-        1 => Just(f32::MAX),
-        1 => Just(1e30f32),
-        1 => Just(-1e-30f32),
-        1 => Just(0.0f32),
-    ]
+    common::poisoned_float()
 }
 
 /// Where a block starts relative to the stream's next sample.
