@@ -14,7 +14,10 @@ use nalgebra::{Matrix3, Matrix5, Vector3};
 
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelState, EmulatedChannel, PhaseTransient, EPOCH_S};
-use super::sample_level::{locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats};
+use super::sample_level::{
+    locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats, SLIP_CYCLES,
+    SLIP_DURATION_S,
+};
 use super::world::{Blockage, LineBiasTruth, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
@@ -35,7 +38,8 @@ pub const AIDING_S: f64 = 0.1;
 pub struct FaultPlan {
     /// Antenna blockages.
     pub blockages: Vec<Blockage>,
-    /// One-cycle phase transients: (time, antenna); each applied to the highest satellite
+    /// One-cycle phase turns of a slaved antenna ([`super::sample_level::SLIP_DURATION_S`]):
+    /// (time, antenna); each applied to the highest satellite
     /// (in the samples when it falls in the sample-level stretch, else on the fast path).
     pub cycle_slips: Vec<(f64, usize)>,
     /// A data-bit transition at a wrong moment (time); applied to the highest satellite.
@@ -225,10 +229,6 @@ fn interpolate(a: &GpsView, b: &GpsView, f: f64) -> GpsView {
 const SAME_EPOCH_S: f64 = 1e-9;
 /// Gyro increments per call (two-sample propagation).
 const GYRO_SUBSAMPLES: usize = 2;
-/// Duration of an injected cycle slip (the carrier turns by one cycle over it), s.
-const SLIP_DURATION_S: f64 = 0.004;
-/// Size of an injected cycle slip, cycles.
-const SLIP_CYCLES: f64 = 1.0;
 /// Epochs between two sky-plot points (1 s).
 const SKY_EVERY_EPOCHS: u64 = 1000;
 /// Extra seconds of samples synthesized beyond the sample-level stretch.
