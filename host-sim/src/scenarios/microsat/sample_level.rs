@@ -289,6 +289,11 @@ impl SampleLevel {
         }
     }
 
+    /// When each PRN's last failed search was, s (the fast path continues the retries).
+    pub fn failed_at(&self) -> &BTreeMap<u8, f64> {
+        &self.failed_at
+    }
+
     /// What the stretch saw so far.
     pub fn stats(&self) -> &SampleStats {
         &self.stats
@@ -314,8 +319,9 @@ impl SampleLevel {
     /// almanac and the orbit (`world.sky`) say which healthy satellites are above the Earth's
     /// limb; with an attitude of its own (`rx`'s receiver), only those predicted above some
     /// antenna's horizon less [`SEARCH_MARGIN_RAD`]; cold, all of them. PRNs with a channel
-    /// are not searched again.
-    fn to_search(t: f64, rx: &Front, world: &World) -> Vec<u8> {
+    /// are not searched again. The fast path searches from the same list
+    /// ([`super::fast_search`]).
+    pub fn to_search(t: f64, rx: &Front, world: &World) -> Vec<u8> {
         let attitude = rx.receiver().attitude();
         let c_ib = (attitude.source != AttitudeSource::None).then(|| {
             let q = attitude.q_rb;
