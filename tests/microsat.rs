@@ -84,4 +84,11 @@ fn a_short_flight_fixes_within_two_seconds_and_comes_near_the_limit() {
         observations as f64 > 0.8 * found as f64 * 4400.0,
         "observations {observations}"
     );
+    // the fast path goes on searching the receiver's own list with the core's acquisition:
+    // the absent PRNs are searched again every 5 s (25 s: several rounds) and fail, no
+    // received one is missed, no channel starts on noise
+    let absent = count("fast_path_searches_absent");
+    assert!(absent >= 10, "fast-path searches of absent PRNs {absent}");
+    assert_eq!(count("fast_path_false_alarms"), 0);
+    assert_eq!(count("fast_path_missed"), 0);
 }

@@ -333,10 +333,8 @@ impl EmulatedChannel {
                 _ => 0.0,
             };
             // the reference loop tracks antenna A's carrier: its prompt sits on I (± the bit)
-            let theta = phi
-                + (psi[p] - psi[0])
-                + (line_bias[p] - line_bias[0])
-                + self.transient(p, t);
+            let theta =
+                phi + (psi[p] - psi[0]) + (line_bias[p] - line_bias[0]) + self.transient(p, t);
             let ni: f64 = StandardNormal.sample(rng);
             let nq: f64 = StandardNormal.sample(rng);
             prompt.i[p] = (amplitude * d * theta.cos() + NOISE_SIGMA * ni) as f32;
@@ -396,12 +394,7 @@ impl EmulatedChannel {
     /// One epoch of the reference antenna's early, prompt, late and noise taps into the lock
     /// window; a full window updates the core's lock detector. `signal` is the prompt's
     /// noise-free part (the early and late taps carry half of it).
-    fn update_lock(
-        &mut self,
-        prompt: &PromptIq<f32>,
-        signal: (f64, f64),
-        noise: &Iq,
-    ) {
+    fn update_lock(&mut self, prompt: &PromptIq<f32>, signal: (f64, f64), noise: &Iq) {
         let rng = &mut self.tap_rng;
         let mut tap = || {
             let (ni, nq): (f64, f64) = (StandardNormal.sample(rng), StandardNormal.sample(rng));
