@@ -84,4 +84,12 @@ fn a_short_flight_fixes_within_two_seconds_and_comes_near_the_limit() {
         observations as f64 > 0.8 * found as f64 * 4400.0,
         "observations {observations}"
     );
+    // the fast path goes on searching the receiver's own list with the core's acquisition:
+    // with its attitude, the PRNs predicted up to 5° below an antenna's horizon, searched
+    // again every 5 s, fail (seed 1: 3 searches); no received one is missed, no channel
+    // starts on noise
+    let absent = count("fast_path_searches_absent");
+    assert!(absent >= 1, "fast-path searches of absent PRNs {absent}");
+    assert_eq!(count("fast_path_false_alarms"), 0);
+    assert_eq!(count("fast_path_missed"), 0);
 }

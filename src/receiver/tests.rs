@@ -193,6 +193,33 @@ fn a_cycle_slip_is_found_and_repaired_and_a_bit_flip_is_flagged() {
     assert!(error_deg(&r, &f) < 0.1);
 }
 
+/// A whole cycle turned over exactly one window (epochs 1500–1599, the microsat run's slip):
+/// the counter follows it in a straight line, but the window's products turn through a whole
+/// cycle and lose their coherence, so the window drops the integer and remembers it; the
+/// re-fix one window later reports the slip.
+#[test]
+fn a_cycle_slip_inside_one_window_is_found_and_repaired() {
+    let mut f = ExampleFlight::new(9);
+    let mut r = AttitudeReceiver::new(ExampleFlight::config(true)).unwrap();
+    f.fly(&mut r, 0, 1500).unwrap();
+    events(&mut r);
+    for (j, k) in (1500..1600).enumerate() {
+        f.phase_offset[2][2] = core::f32::consts::TAU * (j as f32 + 0.5) / 100.0;
+        f.fly(&mut r, k, k + 1).unwrap();
+    }
+    f.phase_offset[2][2] = core::f32::consts::TAU;
+    f.fly(&mut r, 1600, 2000).unwrap();
+    let ev = events(&mut r);
+    let prn = crate::attitude::example::SKY[2].0;
+    assert!(
+        ev.iter().any(|e| matches!(e, ReceiverEvent::CycleSlip { prn: p, antenna: 2, cycles: 1, .. } if *p == prn)),
+        "{ev:?}"
+    );
+    assert_eq!(r.health().satellites_fixed, 8);
+    assert_eq!(r.attitude().source, AttitudeSource::Fine);
+    assert!(error_deg(&r, &f) < 0.1);
+}
+
 #[test]
 fn bad_inputs_are_refused_and_leave_the_receiver_unchanged() {
     let mut f = ExampleFlight::new(1);

@@ -15,6 +15,7 @@
 
 pub mod bound;
 pub mod fast_path;
+pub mod fast_search;
 pub mod files;
 pub mod limit;
 pub mod metrics;
@@ -263,6 +264,32 @@ crate::metrics! {
         #[metric(unit = "deg")] pub limit_fast_path_deg: [f64; 3],
         /// What the sample-level stretch did.
         #[metric(flatten)] #[serde(flatten)] pub sample_level: Option<SampleLevelMetrics>,
+        /// What the fast path's searches and channels did.
+        #[metric(flatten)] #[serde(flatten)] pub fast_path: FastPathMetrics,
+    }
+}
+
+crate::metrics! {
+    /// The fast path's searches (the receiver's search list, the core's acquisition on
+    /// synthesized search blocks) and channel losses (the core's lock detector).
+    pub struct FastPathMetrics {
+        /// Acquisition searches on the fast path.
+        #[metric(unit = "")] pub fast_path_searches: usize,
+        /// Fast-path searches that found their satellite (a channel each).
+        #[metric(unit = "")] pub fast_path_found: usize,
+        /// Fast-path searches of PRNs the reference antenna did not receive.
+        #[metric(unit = "")] pub fast_path_searches_absent: usize,
+        /// Fast-path detections of a PRN the reference antenna did not receive.
+        #[metric(unit = "")] pub fast_path_false_alarms: usize,
+        /// Fast-path searches of a received PRN that found nothing.
+        #[metric(unit = "")] pub fast_path_missed: usize,
+        /// Fast-path channels whose lock detector declared the lock lost.
+        #[metric(unit = "")] pub fast_path_losses: usize,
+        /// Mean time from a satellite vanishing at the reference antenna to its channel's loss
+        /// of lock (null: none vanished).
+        #[metric(unit = "s")] pub fast_path_loss_delay_s: Option<f64>,
+        /// Wall time of the fast path's searches (synthesis and acquisition).
+        #[metric(wall = "s")] pub fast_path_acquisition_wall_s: f64,
     }
 }
 
@@ -368,6 +395,22 @@ fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Met
             sample_level_wall_s: record.wall_s.0,
             fast_path_wall_s: record.wall_s.1,
         }),
+        fast_path: fast_path_metrics(&record.fast_path),
+    }
+}
+
+fn fast_path_metrics(f: &fast_search::FastPathStats) -> FastPathMetrics {
+    let delays = &f.loss_delays_s;
+    FastPathMetrics {
+        fast_path_searches: f.searches,
+        fast_path_found: f.detections,
+        fast_path_searches_absent: f.searches_absent,
+        fast_path_false_alarms: f.false_alarms,
+        fast_path_missed: f.missed,
+        fast_path_losses: f.losses,
+        fast_path_loss_delay_s: (!delays.is_empty())
+            .then(|| delays.iter().sum::<f64>() / delays.len() as f64),
+        fast_path_acquisition_wall_s: f.acquisition_s,
     }
 }
 

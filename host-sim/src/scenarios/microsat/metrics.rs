@@ -772,7 +772,8 @@ pub fn evaluate_fault_run(
     out
 }
 
-/// A one-cycle slip: found against the fine attitude and repaired.
+/// A one-cycle slip ([`super::sample_level::SLIP_DURATION_S`]): found against the fine attitude
+/// and repaired.
 fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutcome {
     let (ts, antenna, prn) = (slip.start_s, slip.antenna, slip.prn);
     let found = ev
@@ -797,8 +798,10 @@ fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutco
         recovered_s: found.map(|(t, _)| t - ts).zip(att).map(|(s, a)| s.max(a)),
         at_s: ts,
         detail: format!(
-            "PRN {prn}, antenna {}: carrier turned by one cycle in 4 ms; {}",
+            "PRN {prn}, antenna {}: carrier turned by {} cycle in {:.0} ms (the block counter counts it, the geometry does not move); {}",
             ANTENNA[antenna.min(2)],
+            super::sample_level::SLIP_CYCLES,
+            super::sample_level::SLIP_DURATION_S * 1e3,
             match found {
                 Some((t, ReceiverEvent::CycleSlip { cycles, .. })) => format!(
                     "slip of {cycles} cycle(s) found against the fine attitude and repaired {:.2} s later",
@@ -807,7 +810,7 @@ fn cycle_slip(ev: &Events, slip: &super::sample_level::SampleSlip) -> FaultOutco
                 _ => {
                     let (worst, inside) = ev.worst_against_sigma(ts, ts + WINDOW.slip_found);
                     format!(
-                        "not detected; the block measurements are 2π-periodic, so a whole-cycle slip leaves nothing to detect: largest error within {:.0} s {worst:.4}°, {}",
+                        "not detected: largest error within {:.0} s {worst:.4}°, {}",
                         WINDOW.slip_found,
                         if inside { "inside 3σ throughout" } else { "outside 3σ at times" }
                     )

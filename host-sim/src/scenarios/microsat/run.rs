@@ -13,8 +13,12 @@ use gnss_attitude::receiver::{
 use nalgebra::{Matrix3, Matrix5, Vector3};
 
 use super::bound::bound_rad;
-use super::fast_path::{rng, ChannelState, EmulatedChannel, PhaseTransient, EPOCH_S};
-use super::sample_level::{locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats};
+use super::fast_path::{rng, ChannelChange, EmulatedChannel, PhaseTransient, EPOCH_S};
+use super::fast_search::{FastPathStats, FastSearch, SearchedSignal};
+use super::sample_level::{
+    locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats, SLIP_CYCLES,
+    SLIP_DURATION_S,
+};
 use super::world::{Blockage, LineBiasTruth, MotionKind, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
@@ -35,7 +39,8 @@ pub const AIDING_S: f64 = 0.1;
 pub struct FaultPlan {
     /// Antenna blockages.
     pub blockages: Vec<Blockage>,
-    /// One-cycle phase transients: (time, antenna); each applied to the highest satellite
+    /// One-cycle phase turns of a slaved antenna ([`super::sample_level::SLIP_DURATION_S`]):
+    /// (time, antenna); each applied to the highest satellite
     /// (in the samples when it falls in the sample-level stretch, else on the fast path).
     pub cycle_slips: Vec<(f64, usize)>,
     /// A data-bit transition at a wrong moment (time); applied to the highest satellite.
@@ -221,6 +226,8 @@ pub struct FlightRecord {
     pub sample_stats: Option<SampleStats>,
     /// Length of the sample-level stretch, s.
     pub sample_level_s: f64,
+    /// What the fast path's searches and channels did.
+    pub fast_path: FastPathStats,
 }
 
 /// `log(Ĉᵀ C)`: the body-frame rotation vector from the estimate to the truth, rad.
@@ -280,10 +287,8 @@ fn interpolate(a: &GpsView, b: &GpsView, f: f64) -> GpsView {
 const SAME_EPOCH_S: f64 = 1e-9;
 /// Gyro increments per call (two-sample propagation).
 const GYRO_SUBSAMPLES: usize = 2;
-/// Duration of an injected cycle slip (the carrier turns by one cycle over it), s.
-const SLIP_DURATION_S: f64 = 0.004;
-/// Size of an injected cycle slip, cycles.
-const SLIP_CYCLES: f64 = 1.0;
+/// Epochs between two fast-path searches (whole seconds, as the sample-level stretch).
+const SEARCH_EVERY_EPOCHS: u64 = 1000;
 /// Epochs between two sky-plot points (1 s).
 const SKY_EVERY_EPOCHS: u64 = 1000;
 /// Extra seconds of samples synthesized beyond the sample-level stretch.
@@ -334,6 +339,8 @@ struct Flight<'a> {
     was_visible: BTreeMap<u8, bool>,
     /// The fast path's noise floor: the core's, from the emulated channels' noise taps.
     noise: NoiseFloor,
+    /// The fast path's searches.
+    search: FastSearch,
     started: std::time::Instant,
 }
 
@@ -403,6 +410,7 @@ impl<'a> Flight<'a> {
             views: (Vec::new(), Vec::new()),
             was_visible: BTreeMap::new(),
             noise: NoiseFloor::new(AdapterConfig::default().noise_time_constant),
+            search: FastSearch::new(config.seed, BTreeMap::new())?,
             started: std::time::Instant::now(),
         })
     }
@@ -426,6 +434,9 @@ impl<'a> Flight<'a> {
             self.inject_faults(&e);
         }
         self.advance_channels(&e);
+        if !e.in_samples && k % SEARCH_EVERY_EPOCHS == 0 {
+            self.search_fast_path(&e)?;
+        }
         if block_start {
             self.set_aiding(&e)?;
         }
@@ -449,8 +460,9 @@ impl<'a> Flight<'a> {
             return;
         };
         for prn in locked(&self.rx) {
+            let cn0 = reported_cn0_dbhz(&self.rx, prn).unwrap_or(0.0);
             if let Some(ch) = self.channels.get_mut(&prn) {
-                ch.continue_tracking();
+                ch.continue_tracking(t0, cn0);
                 if let Some(edge) = sl.next_bit_edge_epoch(prn, t0) {
                     ch.align_bit_edges(edge);
                 }
@@ -461,6 +473,9 @@ impl<'a> Flight<'a> {
             self.rx.release(p);
         }
         self.record.sample_stats = Some(sl.stats().clone());
+        if let Ok(search) = FastSearch::new(self.config.seed, sl.failed_at().clone()) {
+            self.search = search;
+        }
         self.record.wall_s.0 = self.started.elapsed().as_secs_f64();
     }
 
@@ -545,7 +560,7 @@ impl<'a> Flight<'a> {
         }
     }
 
-    /// Horizon crossings, and the emulated channels' lives on the fast path.
+    /// Horizon crossings (truth, for the metrics).
     fn advance_channels(&mut self, e: &EpochTruth) {
         for s in &e.truths {
             let sees = s.elevation[0] >= super::world::MASK_RAD && !s.view.occulted;
@@ -553,36 +568,70 @@ impl<'a> Flight<'a> {
             if before != sees && e.k > 0 {
                 self.record.horizon.push((e.tc, s.view.prn, sees));
             }
-            if e.in_samples {
-                continue;
-            }
-            if let Some(ch) = self.channels.get_mut(&s.view.prn) {
-                ch.advance(e.tc, s.visible[0]);
-            }
         }
     }
 
-    /// Aiding for the channels that deliver or search, highest first.
+    /// The fast path's searches at a whole second: the PRNs of the receiver's own search list
+    /// without a channel and due, while channels are free; the world synthesizes each search
+    /// block from its truth, the core's acquisition decides ([`super::fast_search`]).
+    fn search_fast_path(&mut self, e: &EpochTruth) -> Result<()> {
+        let t = e.t0;
+        let mut running = self.channels.values().filter(|c| c.active()).count();
+        for prn in SampleLevel::to_search(t, &self.rx, &self.world) {
+            if running >= MAX_SATELLITES {
+                break;
+            }
+            let Some(ch) = self.channels.get_mut(&prn) else {
+                continue;
+            };
+            if ch.active() || !self.search.due(prn, t) {
+                continue;
+            }
+            let rate = doppler_rate(&self.views, prn);
+            let signal = e
+                .truths
+                .iter()
+                .find(|s| s.view.prn == prn && s.visible[0])
+                .map(|s| SearchedSignal {
+                    cn0_dbhz: s.cn0_dbhz[0],
+                    doppler_hz: s.view.doppler_hz,
+                    doppler_rate_hz_s: rate,
+                });
+            if self.search.search(prn, t, e.k, signal)? {
+                ch.start(t);
+                running += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Aiding for the channels that run (the receiver's channels), highest first.
     fn set_aiding(&mut self, e: &EpochTruth) -> Result<()> {
         let samples = self.sample_level.is_some() && e.in_samples;
-        let mut wanted: Vec<&SatTruth> = e
-            .truths
-            .iter()
-            .filter(|s| {
-                if samples {
-                    Prn::new(s.view.prn).is_some_and(|p| self.rx.tracks(p))
-                } else {
-                    self.channels
-                        .get(&s.view.prn)
-                        .is_some_and(|c| c.state != ChannelState::Idle)
-                }
-            })
-            .collect();
-        wanted.sort_by(|a, b| b.elevation[0].total_cmp(&a.elevation[0]));
+        let elevation = |prn: u8| {
+            e.truths
+                .iter()
+                .find(|s| s.view.prn == prn)
+                .map_or(f64::NEG_INFINITY, |s| s.elevation[0])
+        };
+        let mut wanted: Vec<(u8, f64)> = if samples {
+            e.truths
+                .iter()
+                .filter(|s| Prn::new(s.view.prn).is_some_and(|p| self.rx.tracks(p)))
+                .map(|s| (s.view.prn, s.elevation[0]))
+                .collect()
+        } else {
+            self.channels
+                .values()
+                .filter(|c| c.active())
+                .map(|c| (c.prn, elevation(c.prn)))
+                .collect()
+        };
+        wanted.sort_by(|a, b| b.1.total_cmp(&a.1));
         wanted.truncate(MAX_SATELLITES);
         let aiding: Vec<SatelliteAiding> = wanted
             .iter()
-            .map(|s| aiding_for(s, &self.views, e.k))
+            .filter_map(|&(prn, _)| aiding_for(prn, &self.views, e.k))
             .collect();
         self.rx
             .receiver_mut()
@@ -601,18 +650,23 @@ impl<'a> Flight<'a> {
             return Ok(tracked);
         }
         let line_bias = self.world.line_bias.at(e.tc);
-        for s in &e.truths {
-            let Some(ch) = self.channels.get_mut(&s.view.prn) else {
-                continue;
-            };
-            if !ch.delivering() {
-                continue;
+        for ch in self.channels.values_mut().filter(|c| c.active()) {
+            let sat = e.truths.iter().find(|s| s.view.prn == ch.prn);
+            let psi = sat.map_or([0.0; 3], |s| {
+                [0, 1, 2].map(|p| self.world.geometric_phase(p, &s.view.los, &e.c_ib))
+            });
+            let (obs, noise, change) = ch.observe(e.k, e.tc, sat, psi, line_bias, &mut self.rng);
+            if let ChannelChange::Lost { gone_s } = change {
+                let st = &mut self.search.stats;
+                st.losses += 1;
+                st.loss_delays_s.extend(gone_s);
             }
-            let psi = [0, 1, 2].map(|p| self.world.geometric_phase(p, &s.view.los, &e.c_ib));
-            let (mut obs, noise) = ch.observe(e.k, e.tc, s, psi, line_bias, &mut self.rng);
             self.noise.add(&noise_taps(noise));
             // the noise variance the receiver measures, as its adapter does from samples
-            let Some(var) = self.noise.variance(AdapterConfig::default().noise_min_taps) else {
+            let (Some(mut obs), Some(var)) = (
+                obs,
+                self.noise.variance(AdapterConfig::default().noise_min_taps),
+            ) else {
                 continue;
             };
             obs.noise_var = var[0];
@@ -681,6 +735,7 @@ impl<'a> Flight<'a> {
         if let Some(sl) = &self.sample_level {
             record.sample_stats = Some(sl.stats().clone());
         }
+        record.fast_path = self.search.stats.clone();
         record.calibration = self.rx.receiver_mut().gyro_calibration();
         let b = self.gyro.current_errors();
         let est = self.rx.receiver_mut().gyro_bias();
@@ -734,24 +789,30 @@ fn sample_slips(config: &FlightConfig, world: &World) -> Vec<SampleSlip> {
         .collect()
 }
 
-/// The aiding of satellite `s` at epoch `k`: its line of sight at the block's start and the
-/// rate over the block.
-fn aiding_for(s: &SatTruth, views: &(Vec<GpsView>, Vec<GpsView>), k: u64) -> SatelliteAiding {
-    let prn = s.view.prn;
-    let (a, b) = (
-        views.0.iter().find(|v| v.prn == prn),
-        views.1.iter().find(|v| v.prn == prn),
-    );
-    let rate = match (a, b) {
-        (Some(a), Some(b)) => (b.los - a.los) / AIDING_S,
-        _ => Vector3::zeros(),
-    };
-    let los = a.map_or(s.view.los, |a| a.los);
-    SatelliteAiding {
+/// The aiding of satellite `prn` at epoch `k`: its line of sight at the block's start and the
+/// rate over the block (`None` when the views lack it).
+fn aiding_for(prn: u8, views: &(Vec<GpsView>, Vec<GpsView>), k: u64) -> Option<SatelliteAiding> {
+    let a = views.0.iter().find(|v| v.prn == prn)?;
+    let rate = views
+        .1
+        .iter()
+        .find(|v| v.prn == prn)
+        .map_or(Vector3::zeros(), |b| (b.los - a.los) / AIDING_S);
+    let los = a.los;
+    Some(SatelliteAiding {
         prn,
         epoch: k,
         los: [los.x as f32, los.y as f32, los.z as f32],
         los_rate: [rate.x as f32, rate.y as f32, rate.z as f32],
+    })
+}
+
+/// The Doppler rate of `prn` over the aiding block, Hz/s (0 when the views lack it).
+fn doppler_rate(views: &(Vec<GpsView>, Vec<GpsView>), prn: u8) -> f64 {
+    let find = |v: &[GpsView]| v.iter().find(|v| v.prn == prn).map(|v| v.doppler_hz);
+    match (find(&views.0), find(&views.1)) {
+        (Some(a), Some(b)) => (b - a) / AIDING_S,
+        _ => 0.0,
     }
 }
 

@@ -51,6 +51,28 @@ pub const RETRY_AFTER_S: f64 = 5.0;
 /// A channel without lock for this long is closed (its slot searched again), s.
 pub const DROP_AFTER_S: f64 = 2.0;
 
+/// Duration of an injected cycle slip: the slaved antenna's carrier turns by [`SLIP_CYCLES`]
+/// over it, s.
+///
+/// Why 100 ms and not the 4 ms of a PLL's slip: the receiver keeps the whole cycles of each
+/// single difference in a counter advanced once per 20 ms block
+/// ([`ReceiverConfig::block_epochs`](gnss_attitude::receiver::ReceiverConfig)) from the
+/// block's phase `arg Σ z_P z_A*`. A whole cycle turned inside one block (4 ms) leaves that
+/// phase where it was (the turning epochs' products sum to about zero) and the counter, the
+/// integers, the fine filter's block phases and the attitude all unchanged: the count stays
+/// consistent with the geometry, there is nothing to detect and nothing to repair (a run with
+/// it reports the attitude inside 3σ throughout). The slip that harms this receiver is one its
+/// counter *does* count while the geometry does not move: a turn spread over several blocks
+/// (here 0.2 cycle per block, well inside the counter's ±½ cycle). Its whole-cycle count is
+/// then one off the fixed integer, exactly what a PLL slip does to a per-antenna receiver's
+/// count; the ambiguity upkeep must find it against the fine attitude
+/// ([`ReceiverEvent::CycleSlip`](gnss_attitude::receiver::ReceiverEvent)) and repair the
+/// integer, or the snapshot monitor, the rigid-body filter and the integrity check take a
+/// one-cycle error.
+pub const SLIP_DURATION_S: f64 = 0.1;
+/// Size of an injected cycle slip, cycles.
+pub const SLIP_CYCLES: f64 = 1.0;
+
 /// What the stretch saw.
 #[derive(Clone, Debug, Default)]
 pub struct SampleStats {
@@ -148,8 +170,9 @@ fn tracks(world: &World, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
         .collect()
 }
 
-/// A cycle slip in the samples: at `start_s`, antenna `antenna`'s carrier of satellite `prn`
-/// turns by one cycle in 4 ms.
+/// An injected cycle slip: from `start_s`, antenna `antenna`'s carrier of satellite `prn` turns
+/// by [`SLIP_CYCLES`] over [`SLIP_DURATION_S`] (in the samples inside the sample-level
+/// stretch, in the fast path's prompts after it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampleSlip {
     /// Time, s.
@@ -178,8 +201,8 @@ pub fn chain_params(
                 .map(|s| CarrierStep {
                     antenna: s.antenna,
                     start_s: s.start_s,
-                    duration_s: 0.004,
-                    cycles: 1.0,
+                    duration_s: SLIP_DURATION_S,
+                    cycles: SLIP_CYCLES,
                 })
                 .collect();
             (prn, track)
@@ -266,6 +289,11 @@ impl SampleLevel {
         }
     }
 
+    /// When each PRN's last failed search was, s (the fast path continues the retries).
+    pub fn failed_at(&self) -> &BTreeMap<u8, f64> {
+        &self.failed_at
+    }
+
     /// What the stretch saw so far.
     pub fn stats(&self) -> &SampleStats {
         &self.stats
@@ -291,8 +319,9 @@ impl SampleLevel {
     /// almanac and the orbit (`world.sky`) say which healthy satellites are above the Earth's
     /// limb; with an attitude of its own (`rx`'s receiver), only those predicted above some
     /// antenna's horizon less [`SEARCH_MARGIN_RAD`]; cold, all of them. PRNs with a channel
-    /// are not searched again.
-    fn to_search(t: f64, rx: &Front, world: &World) -> Vec<u8> {
+    /// are not searched again. The fast path searches from the same list
+    /// ([`super::fast_search`]).
+    pub fn to_search(t: f64, rx: &Front, world: &World) -> Vec<u8> {
         let attitude = rx.receiver().attitude();
         let c_ib = (attitude.source != AttitudeSource::None).then(|| {
             let q = attitude.q_rb;
