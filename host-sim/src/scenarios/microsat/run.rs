@@ -19,7 +19,7 @@ use super::sample_level::{
     locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats, SLIP_CYCLES,
     SLIP_DURATION_S,
 };
-use super::world::{Blockage, LineBiasTruth, MotionKind, SatTruth, World};
+use super::world::{Blockage, LineBiasTruth, MotionKind, NavigationError, SatTruth, World};
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
 use crate::truth::sky::GpsView;
@@ -297,6 +297,8 @@ const SAMPLE_MARGIN_S: f64 = 0.5;
 const GYRO_SEED_SALT: u64 = 0x6779;
 /// Seed salt of the RF chains' power-up line biases.
 const LINE_BIAS_SEED_SALT: u64 = 0x6c62;
+/// Seed salt of the navigation's orbit and ephemeris errors.
+const NAVIGATION_SEED_SALT: u64 = 0x6e76;
 
 /// Runs one flight: the sample-level chain for the first [`FlightConfig::sample_level_s`],
 /// then the fast path from the channels it hands over.
@@ -333,8 +335,12 @@ struct Flight<'a> {
     sample_epochs: u64,
     /// Epochs per aiding update (and record).
     per_block: u64,
-    /// The satellites' views at the start and the end of the current aiding block.
+    /// The satellites' views at the start and the end of the current aiding block (the
+    /// world's truth, which the signals are synthesized from).
     views: (Vec<GpsView>, Vec<GpsView>),
+    /// The same views as the flight computer's navigation predicts them (what the receiver is
+    /// aided with).
+    navigation_views: (Vec<GpsView>, Vec<GpsView>),
     /// Whether each satellite was above the reference antenna's mask.
     was_visible: BTreeMap<u8, bool>,
     /// The fast path's noise floor: the core's, from the emulated channels' noise taps.
@@ -371,6 +377,7 @@ impl<'a> Flight<'a> {
             }));
         }
         world.line_bias = LineBiasTruth::power_up(config.seed ^ LINE_BIAS_SEED_SALT);
+        world.navigation = NavigationError::draw(config.seed ^ NAVIGATION_SEED_SALT);
         let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
         let rx = Box::new(
             Front::new(rcfg, SampleLevel::front_config())
@@ -408,6 +415,7 @@ impl<'a> Flight<'a> {
             sample_epochs,
             per_block: (AIDING_S / EPOCH_S).round() as u64,
             views: (Vec::new(), Vec::new()),
+            navigation_views: (Vec::new(), Vec::new()),
             was_visible: BTreeMap::new(),
             noise: NoiseFloor::new(AdapterConfig::default().noise_time_constant),
             search: FastSearch::new(config.seed, BTreeMap::new())?,
@@ -427,6 +435,16 @@ impl<'a> Flight<'a> {
             self.views = (
                 self.world.sky.views(t0),
                 self.world.sky.views(t0 + AIDING_S),
+            );
+            let predict = |views: &[GpsView], t: f64| -> Vec<GpsView> {
+                views
+                    .iter()
+                    .map(|v| self.world.navigation.predicted(v, t))
+                    .collect()
+            };
+            self.navigation_views = (
+                predict(&self.views.0, t0),
+                predict(&self.views.1, t0 + AIDING_S),
             );
         }
         let e = self.truth(k, t0);
@@ -631,7 +649,7 @@ impl<'a> Flight<'a> {
         wanted.truncate(MAX_SATELLITES);
         let aiding: Vec<SatelliteAiding> = wanted
             .iter()
-            .filter_map(|&(prn, _)| aiding_for(prn, &self.views, e.k))
+            .filter_map(|&(prn, _)| aiding_for(prn, &self.navigation_views, e.k))
             .collect();
         self.rx
             .receiver_mut()

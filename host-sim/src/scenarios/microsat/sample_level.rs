@@ -334,8 +334,7 @@ impl SampleLevel {
             .to_dcm()
         });
         world
-            .sky
-            .views(t)
+            .navigation_views(t)
             .into_iter()
             .filter(|v| !v.occulted)
             .filter(|v| {

@@ -89,6 +89,97 @@ pub struct World {
     pub line_bias: LineBiasTruth,
     /// Blockages.
     pub blockages: Vec<Blockage>,
+    /// The error of the flight computer's navigation (orbit and ephemerides), applied to every
+    /// view the receiver is aided with.
+    pub navigation: NavigationError,
+}
+
+/// σ per axis of the onboard orbit's position error, m (a single-frequency single-point fix
+/// filtered onboard).
+pub const NAV_POSITION_SIGMA_M: f64 = 10.0;
+/// σ per axis of the onboard orbit's velocity error, m/s.
+pub const NAV_VELOCITY_SIGMA_M_S: f64 = 0.05;
+/// σ per axis of a GPS satellite's position from the broadcast ephemeris, m.
+pub const EPHEMERIS_POSITION_SIGMA_M: f64 = 2.0;
+/// Period of the onboard orbit error's slow oscillation (once per orbit), s.
+pub const NAV_ERROR_PERIOD_S: f64 = 5_700.0;
+
+/// What the flight computer's navigation gets wrong: its own orbit (a position error that
+/// oscillates once per orbit, and a velocity error) and each GPS satellite's ephemeris position
+/// (fixed over the flight). Drawn once per run from its seed; zero for [`Self::none`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct NavigationError {
+    /// Amplitude of the orbit position error per ECI axis, m.
+    pub position_m: [f64; 3],
+    /// Phase of the orbit error's oscillation per axis, rad.
+    pub phase_rad: [f64; 3],
+    /// Orbit velocity error per ECI axis, m/s.
+    pub velocity_m_s: [f64; 3],
+    /// Ephemeris position error per PRN (index PRN − 1), ECI, m.
+    pub ephemeris_m: Vec<[f64; 3]>,
+}
+
+impl NavigationError {
+    /// No error (the examples and the tests of the geometry).
+    pub fn none() -> Self {
+        Self {
+            position_m: [0.0; 3],
+            phase_rad: [0.0; 3],
+            velocity_m_s: [0.0; 3],
+            ephemeris_m: vec![[0.0; 3]; 32],
+        }
+    }
+
+    /// A navigation error drawn with the σ above from `seed`.
+    pub fn draw(seed: u64) -> Self {
+        use rand::{Rng, SeedableRng};
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut normal = |sigma: f64| -> f64 {
+            let x: f64 = StandardNormal.sample(&mut rng);
+            sigma * x
+        };
+        // the amplitude of a sinusoid whose RMS is σ: √2 σ
+        let position_m = [(); 3].map(|_| normal(NAV_POSITION_SIGMA_M * std::f64::consts::SQRT_2));
+        let velocity_m_s = [(); 3].map(|_| normal(NAV_VELOCITY_SIGMA_M_S));
+        let ephemeris_m = (0..32)
+            .map(|_| [(); 3].map(|_| normal(EPHEMERIS_POSITION_SIGMA_M)))
+            .collect();
+        let phase_rad = [(); 3].map(|_| rng.random_range(0.0..std::f64::consts::TAU));
+        Self {
+            position_m,
+            phase_rad,
+            velocity_m_s,
+            ephemeris_m,
+        }
+    }
+
+    /// The onboard orbit's position error at `t`, ECI, m.
+    pub fn position_error(&self, t: f64) -> Vector3<f64> {
+        let w = std::f64::consts::TAU / NAV_ERROR_PERIOD_S;
+        Vector3::from([0, 1, 2].map(|i| self.position_m[i] * (w * t + self.phase_rad[i]).sin()))
+    }
+
+    /// `view` as the flight computer predicts it at `t`: line of sight, range and Doppler
+    /// from its own orbit and the broadcast ephemeris instead of the truth's.
+    pub fn predicted(&self, view: &GpsView, t: f64) -> GpsView {
+        let ephemeris = self
+            .ephemeris_m
+            .get(usize::from(view.prn).wrapping_sub(1))
+            .map_or(Vector3::zeros(), |e| Vector3::from(*e));
+        let relative = view.los * view.range + ephemeris - self.position_error(t);
+        let range = relative.norm();
+        let los = relative / range;
+        let range_rate = view.range_rate - los.dot(&Vector3::from(self.velocity_m_s));
+        GpsView {
+            position: view.position + ephemeris,
+            los,
+            range,
+            range_rate,
+            doppler_hz: view.doppler_hz - (range_rate - view.range_rate) / L1_WAVELENGTH_M,
+            ..*view
+        }
+    }
 }
 
 /// Largest line-bias drift rate of one RF chain, rad/s (a few degrees per hour: 5°/h).
@@ -199,7 +290,18 @@ impl World {
             antennas: zenith_triangle(),
             line_bias: LineBiasTruth::default(),
             blockages: Vec::new(),
+            navigation: NavigationError::none(),
         }
+    }
+
+    /// The satellites' views at `t` as the flight computer predicts them (almanac and
+    /// ephemerides with its own orbit, [`NavigationError`]): what the receiver is aided with.
+    pub fn navigation_views(&self, t: f64) -> Vec<GpsView> {
+        self.sky
+            .views(t)
+            .iter()
+            .map(|v| self.navigation.predicted(v, t))
+            .collect()
     }
 
     /// `C_ib(t)`: body to ECI.
@@ -270,6 +372,39 @@ pub enum MotionKind {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The navigation's prediction moves the lines of sight by about its position errors over
+    /// the range (tens of metres over 20 000 km: microradians), never by zero when it has
+    /// errors, and not at all without them.
+    #[test]
+    fn navigation_errors_move_the_predicted_lines_of_sight_by_microradians() {
+        let mut w = World::new(MotionKind::Nadir, 0.0, 0.0, [0.0; 3]);
+        let t = 100.0;
+        let truth = w.sky.views(t);
+        for (a, b) in truth.iter().zip(&w.navigation_views(t)) {
+            assert!(
+                a.los.cross(&b.los).norm() < 1e-12 && (a.doppler_hz - b.doppler_hz).abs() < 1e-9
+            );
+        }
+        w.navigation = NavigationError::draw(7);
+        let predicted = w.navigation_views(t);
+        let mut largest = 0.0f64;
+        for (a, b) in truth.iter().zip(&predicted) {
+            let angle = a.los.cross(&b.los).norm();
+            assert!(angle > 1e-9, "PRN {}: unchanged", a.prn);
+            largest = largest.max(angle);
+            let doppler = (a.doppler_hz - b.doppler_hz).abs();
+            assert!(
+                doppler < 5.0 * NAV_VELOCITY_SIGMA_M_S / L1_WAVELENGTH_M,
+                "{doppler} Hz"
+            );
+        }
+        let expected = (NAV_POSITION_SIGMA_M + EPHEMERIS_POSITION_SIGMA_M) / 2.0e7;
+        assert!(
+            largest < 10.0 * expected && largest > 0.1 * expected,
+            "{largest} rad"
+        );
+    }
 
     #[test]
     fn the_zenith_antennas_see_a_leo_sky_with_enough_satellites() {
