@@ -471,7 +471,7 @@ impl<const W: usize> PlaneBuffer<W> {
     /// `MultiChannel2`: one byte per sample; channel `c`'s sign and magnitude bits (`2c + 1`,
     /// `2c`) of four bytes gathered by one multiply each.
     fn pack_mc2(&mut self, bytes: &[u8], channel: usize, n: usize) {
-        let shift = 2 * (channel as u32 & 3);
+        let channel = channel as u32;
         // Bit 8j (j = 0..3) times 2^(24 − 7j) lands on bit 24 + j; no two partial products
         // share a bit, so there are no carries.
         let gather = |x: u32| ((x & 0x0101_0101).wrapping_mul(0x0102_0408)) >> 24;
@@ -479,7 +479,8 @@ impl<const W: usize> PlaneBuffer<W> {
             let (mut s, mut m) = (0u32, 0u32);
             for (g, quad) in b.chunks_exact(4).enumerate() {
                 if let &[x0, x1, x2, x3] = quad {
-                    let x = u32::from_le_bytes([x0, x1, x2, x3]) >> shift;
+                    // (the shift's bound visible here: the closure is compiled on its own)
+                    let x = u32::from_le_bytes([x0, x1, x2, x3]) >> (2 * (channel & 3));
                     s |= gather(x >> 1) << (4 * g);
                     m |= gather(x) << (4 * g);
                 }
