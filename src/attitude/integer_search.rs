@@ -301,6 +301,7 @@ fn insert<const M: usize, const N: usize, T: Real>(
     if best.is_full() {
         best.pop();
     }
-    // a slot is free and `p ≤ len`: the insertion cannot fail
-    let _ = best.insert(p, c);
+    // a slot is free and `p ≤ len`: the insertion cannot fail (the `min` shows the
+    // compiler the bound, which it cannot follow through the search above)
+    let _ = best.insert(p.min(best.len()), c);
 }

@@ -208,7 +208,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             SnapshotQuality::Good
         };
         let euler = Euler321::from_dcm(&c_rb)?;
-        let positive = (0..3).all(|i| covariance[(i, i)] > T::zero());
+        let positive = covariance.diagonal().iter().all(|&v| v > T::zero());
         let finite = covariance.iter().all(|v| v.is_finite())
             && residual_rms.is_finite()
             && chi_square.is_finite();

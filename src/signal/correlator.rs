@@ -396,7 +396,7 @@ impl<const A: usize> Correlator<A> {
             self.epoch_carrier_phase = self.carrier_total;
         }
         self.correlate_span(block, start, n);
-        *cursor = start + n;
+        *cursor = start.saturating_add(n); // (n ≤ len − start: never saturates)
         if (n as u64) < to_wrap {
             return Ok(None);
         }

@@ -362,7 +362,7 @@ impl<const A: usize> BitCorrelator<A> {
             self.epoch_carrier_phase = self.carrier_total;
         }
         self.correlate_span(block, start, n);
-        *cursor = start + n;
+        *cursor = start.saturating_add(n); // (n ≤ len − start: never saturates)
         if (n as u64) < to_wrap {
             return Ok(None);
         }
@@ -388,7 +388,8 @@ impl<const A: usize> BitCorrelator<A> {
         let l3 = self.levels == CarrierLevels::Three;
         let [nc, ns] = self.support;
         let mut out = [Taps::default(); A];
-        for (a, (t, acc)) in out.iter_mut().zip(self.acc.iter()).enumerate() {
+        // (indices from `0..A`, not `enumerate`: its counter keeps an overflow check)
+        for (a, (t, acc)) in (0..A).zip(out.iter_mut().zip(self.acc.iter())) {
             let tap = |k: usize| {
                 let p = acc.get(k).copied().unwrap_or_default();
                 let (i, q) = kernel::combine(cx, tb, l3, &p, nc, ns);
@@ -453,7 +454,7 @@ impl<const A: usize> BitCorrelator<A> {
         let (cx, tb) = (self.format.complex, self.format.two_bit());
         let edges = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
         let work = &mut self.work;
-        for (a, acc) in self.acc.iter_mut().enumerate() {
+        for (a, acc) in (0..A).zip(self.acc.iter_mut()) {
             let Some(planes) = block.planes(a) else {
                 continue;
             };
@@ -529,8 +530,14 @@ impl<const A: usize> BitCorrelator<A> {
         for (p, &c) in work.prompt.iter_mut().zip(work.cursors.iter()).take(words) {
             *p = code::prompt_word(&self.ext, table, c, step4);
         }
-        let base = back * WORD_SAMPLES;
-        let offsets = [base + d, base, base - d, base - self.noise_delay];
+        // (base ≥ d and ≥ the noise delay, both a few words: the saturations never act)
+        let base = back.saturating_mul(WORD_SAMPLES);
+        let offsets = [
+            base.saturating_add(d),
+            base,
+            base.saturating_sub(d),
+            base.saturating_sub(self.noise_delay),
+        ];
         for (taps, offset) in work.taps.iter_mut().zip(offsets) {
             window_words(taps.get_mut(..nw).unwrap_or_default(), &work.prompt, offset);
         }
@@ -676,7 +683,7 @@ fn antenna<const CX: bool, const TB: bool, const L3: bool>(
             code.get(..n).unwrap_or_default()
         };
         let x = |j: usize| scratch.get(j).and_then(|s| s.get(..n)).unwrap_or_default();
-        for (j, sum) in sums.iter_mut().enumerate().take(j_count) {
+        for (j, sum) in (0..j_count).zip(sums.iter_mut()) {
             // (at most the epoch's samples, 2¹⁶: never wraps; as the integer correlator's)
             *sum = sum.wrapping_add(kernel::xor_count(x(j), code(j)));
         }

@@ -139,7 +139,7 @@ pub(crate) fn prepare<const CX: bool, const TB: bool, const L3: bool>(
         let ((((r, &a), &ma), &b), &mb) = inputs;
         let u = streams::<CX, TB, L3>(a, ma, b, mb, r);
         let slots = [w0, w1, w2, w3, w4, w5, w6, w7];
-        for (j, (slot, x)) in slots.into_iter().zip(u).enumerate() {
+        for (j, (slot, x)) in (0..MAX_STREAMS).zip(slots.into_iter().zip(u)) {
             if j < j_count {
                 let mask = if !L3 {
                     u32::MAX
@@ -246,13 +246,13 @@ pub(crate) fn combine(
     // (in i64, exact for any u32 counts; the counts are at most 2¹⁶, the largest epoch, so
     // the results fit i32 and the final saturation never acts)
     let mut sums = [0i64; MAX_STREAMS];
-    for (j, s) in sums.iter_mut().enumerate().take(j_count) {
+    for (j, (s, &pj)) in (0..MAX_STREAMS).zip(sums.iter_mut().zip(p)).take(j_count) {
         let n = if stream_uses_s(complex, two_bit, three, j) {
             ns
         } else {
             nc
         };
-        *s = i64::from(n) - 2 * i64::from(p[j]);
+        *s = i64::from(n) - 2 * i64::from(pj);
     }
     // One product's sum: a 1-bit stream, or 2·sign − t for 2-bit samples.
     let product = |k: usize| {
