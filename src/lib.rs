@@ -100,6 +100,14 @@ pub trait Real: nalgebra::RealField + Copy {}
 
 impl<T: nalgebra::RealField + Copy> Real for T {}
 
+/// The number of items of `items`, as [`Iterator::count`] but saturating: `count`'s sum keeps an
+/// overflow check the optimizer cannot discharge (it cannot bound a slice's length), and a
+/// count of items in memory never reaches `usize::MAX`.
+#[inline]
+pub(crate) fn count<I: Iterator>(items: I) -> usize {
+    items.fold(0, |n, _| n.saturating_add(1))
+}
+
 /// Converts an `f64` constant into the scalar type `T` (exact for `f64`, rounded for `f32`).
 #[inline]
 pub(crate) fn real<T: Real>(value: f64) -> T {

@@ -148,7 +148,7 @@ pub fn run_ekf_self_test() -> Result<SelfTestReport, FilterError> {
         let z = model.h * truth + normal.vector::<2, _>(&mut rng, SELF_TEST_SIGMA_POS);
         let report = model.step(&mut ekf, &z)?;
         nis_sum += report.nis;
-        accepted += u32::from(report.accepted);
+        accepted = accepted.saturating_add(u32::from(report.accepted)); // (one per step)
         if k >= SELF_TEST_STEPS / 2 {
             nees_sum += ekf.nees(&truth)?;
         }

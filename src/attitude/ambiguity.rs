@@ -230,12 +230,13 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         let (dd, search) = self.fix_integers(&model)?;
         // single-difference integers: zero for the reference, the DD integers for the others
         let mut fixed = [[0i32; N]; M];
-        for (i, row) in fixed.iter_mut().enumerate() {
+        for (i, row) in (0..M).zip(fixed.iter_mut()) {
             let mut next = 0usize;
-            for (j, z) in row.iter_mut().enumerate().take(n) {
+            for (j, z) in (0..n).zip(row.iter_mut()) {
                 if j != reference {
                     *z = dd[i].get(next).copied().unwrap_or(0);
-                    next += 1;
+                    // (at most j: never saturates)
+                    next = next.saturating_add(1);
                 }
             }
         }
@@ -371,7 +372,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                 |i, z| {
                     let (Some(&length), Some(&var_i), true) = (
                         lengths.get(i),
-                        sigma_b.as_slice().get(i * (M + 1)),
+                        i.checked_mul(M + 1).and_then(|d| sigma_b.as_slice().get(d)),
                         constrained,
                     ) else {
                         return T::zero();
@@ -384,7 +385,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
                         return Some(T::zero());
                     }
                     let mut a = [Vector3::zeros(); M];
-                    for (i, (ai, zi)) in a.iter_mut().zip(z.iter()).enumerate() {
+                    for (i, (ai, zi)) in (0..M).zip(a.iter_mut().zip(z.iter())) {
                         *ai = conditional(i, zi);
                     }
                     self.solver
@@ -403,7 +404,9 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     /// constrained, `M n` unconstrained.
     fn gate(&self, n: usize) -> T {
         let constrained = self.config.mode == SearchMode::Constrained;
-        let dof = M * n + if constrained { 3 * (M - 1) } else { 0 };
+        let dof = M
+            .saturating_mul(n)
+            .saturating_add(if constrained { 3 * (M - 1) } else { 0 });
         real(chi_square_quantile(dof, GateConfidence::P999).unwrap_or(UNBOUNDED_GATE))
     }
 
@@ -447,7 +450,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         let cfg = &self.config;
         let (k_phi, k_code, kappa) = (cfg.k_phi(), cfg.k_code(), cfg.kappa());
         let mut ranges = RangeDifferences::<M, N, T>::new();
-        for (j, s) in sats.iter().enumerate().take(N) {
+        for (j, s) in (0..N).zip(sats.iter()) {
             let mut range_diff = [T::zero(); M];
             for i in 0..M {
                 let zij: T = real(f64::from(fixed[i][j]));
@@ -492,7 +495,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         let mut sigma = [T::zero(); M];
         for i in 0..M {
             let mut rhs = Vector4::zeros();
-            for (j, s) in sats.iter().enumerate().take(N) {
+            for (j, s) in (0..N).zip(sats.iter()) {
                 let row = Vector4::new(
                     s.los.x / lambda,
                     s.los.y / lambda,
@@ -559,7 +562,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
         for i in 0..M {
             let a = solution.c_rb * baselines[i];
             let mut sum = T::zero();
-            for (j, s) in sats.iter().enumerate().take(N) {
+            for (j, s) in (0..N).zip(sats.iter()) {
                 let zij: T = real(f64::from(fixed[i][j]));
                 sum += (s.phase_cycles[i] - zij - s.los.dot(&a) / lambda) / s.cofactor;
             }
@@ -680,7 +683,8 @@ impl<T: Real> AmbiguityConfig<T> {
 /// The satellite with the smallest cofactor (the double differences' reference).
 fn best_satellite<const M: usize, T: Real>(sats: &[PhaseSatellite<M, T>]) -> Option<usize> {
     let mut best: Option<(usize, T)> = None;
-    for (j, s) in sats.iter().enumerate() {
+    // (indices from a range, not `enumerate`: its counter keeps an overflow check)
+    for (j, s) in (0..sats.len()).zip(sats.iter()) {
         if best.is_none_or(|(_, c)| s.cofactor < c) {
             best = Some((j, s.cofactor));
         }
@@ -696,7 +700,7 @@ impl<const M: usize, const N: usize, T: Real> FloatModel<M, N, T> {
         let n = obs.satellites().len().min(N);
         let sats = obs.satellites().get(..n).unwrap_or(&[]);
         let mut model = Self::empty(n);
-        for (j, s) in sats.iter().enumerate().take(N) {
+        for (j, s) in (0..N).zip(sats.iter()) {
             model.design[j] = s.los;
             model.cofactor[(j, j)] = s.cofactor;
             model.weight[(j, j)] = T::one() / s.cofactor;
@@ -713,12 +717,11 @@ impl<const M: usize, const N: usize, T: Real> FloatModel<M, N, T> {
         let reference = sats.get(r).ok_or(SnapshotError::TooFewSatellites)?;
         let n = sats.len().saturating_sub(1).min(N);
         let mut model = Self::empty(n);
-        let others = sats
-            .iter()
-            .enumerate()
+        let others = (0..sats.len())
+            .zip(sats.iter())
             .filter(|(j, _)| *j != r)
             .map(|(_, s)| s);
-        for (j, s) in others.enumerate().take(n) {
+        for (j, s) in (0..n).zip(others) {
             // (j < n ≤ N; the check lets the compiler see it through the filter)
             if j >= N {
                 break;
@@ -859,9 +862,9 @@ impl<const M: usize, const N: usize, T: Real> FloatModel<M, N, T> {
     ) -> [Vector3<T>; N] {
         let scale = cfg.wavelength_m * cfg.k_phi() / cfg.kappa();
         let mut t_a = [Vector3::zeros(); N];
-        for (c, col) in t_a.iter_mut().enumerate().take(self.dim()) {
+        for (c, col) in (0..self.dim()).zip(t_a.iter_mut()) {
             let mut column = [T::zero(); N];
-            for (j, v) in column.iter_mut().enumerate().take(self.dim()) {
+            for (j, v) in (0..self.dim()).zip(column.iter_mut()) {
                 *v = dec.z_inv_t[(j, c)];
             }
             *col = self.info_inv * self.s_w(&column) * scale;

@@ -62,7 +62,7 @@ pub struct DirectionCosineModel<T = f32> {
 
 /// Relabels body-axis components cyclically so that axis `k` comes first.
 fn to_model_axes<T: Real>(v: &Vector3<T>, k: usize) -> Vector3<T> {
-    Vector3::from_fn(|j, _| v[(k + j) % 3])
+    Vector3::from_fn(|j, _| v[(k % 3 + j) % 3])
 }
 
 /// Inverse of [`to_model_axes`].
@@ -119,7 +119,7 @@ impl<T: Real> DirectionCosineModel<T> {
 
     /// The state `Y` of a body-to-reference DCM (its two kept columns, interleaved by row).
     pub fn state_from_dcm(&self, c_rb: &Matrix3<T>) -> SVector<T, 6> {
-        let k = self.eliminated;
+        let k = self.eliminated % 3; // (0–2 by construction; the bound made visible)
         let c2 = c_rb.column((k + 1) % 3);
         let c3 = c_rb.column((k + 2) % 3);
         SVector::<T, 6>::new(c2[0], c3[0], c2[1], c3[1], c2[2], c3[2])
@@ -143,8 +143,8 @@ impl<T: Real> DirectionCosineModel<T> {
     /// rotation only when the two kept columns are orthonormal.
     pub fn dcm(&self, y: &SVector<T, 6>) -> Matrix3<T> {
         let m = Self::dcm_model_axes(y);
-        let k = self.eliminated;
-        // column (k + j) mod 3 of M is column j of the relabelled matrix
+        let k = self.eliminated % 3; // (0–2 by construction; the bound made visible)
+                                     // column (k + j) mod 3 of M is column j of the relabelled matrix
         Matrix3::from_fn(|r, c| m[(r, (c + 3 - k) % 3)])
     }
 
@@ -233,7 +233,7 @@ impl<T: Real> DirectionCosineModel<T> {
     /// perturbation `δY` about the attitude `c_hat` (a proper rotation close to `M(Y)`). Maps
     /// the state covariance to the attitude-error covariance `S R Sᵀ`.
     pub fn attitude_jacobian(&self, c_hat: &Matrix3<T>, y: &SVector<T, 6>) -> SMatrix<T, 3, 6> {
-        let k = self.eliminated;
+        let k = self.eliminated % 3; // (0–2 by construction; the bound made visible)
         let c_model = Matrix3::from_fn(|r, c| c_hat[(r, (c + k) % 3)]);
         let (c2, c3) = Self::columns(y);
         let half: T = real(0.5);

@@ -390,9 +390,9 @@ impl<T: Real> GyroAidedFilter<T> {
         for block in blocks {
             let (y, h) = next.linearize(&c_rb, block);
             let r = next.ekf.update(&y, &h, &block.covariance, gate)?;
-            report.offered += 1;
+            report.offered = report.offered.saturating_add(1); // (counts: saturate)
             if r.accepted {
-                report.accepted += 1;
+                report.accepted = report.accepted.saturating_add(1);
                 report.nis_sum += r.nis;
             } else {
                 report.rejected_nis_sum += r.nis;

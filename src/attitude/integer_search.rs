@@ -102,11 +102,12 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
         let mut g = 0usize;
         self.enter(g, &mut lv, &mut zbar, &zint);
         loop {
-            out.nodes += 1;
+            // (bounded by max_nodes just below)
+            out.nodes = out.nodes.saturating_add(1);
             if out.nodes > self.max_nodes {
                 return Err(SearchFailure::Budget);
             }
-            let (i, k) = (g / n, n - 1 - g % n);
+            let (i, k) = (g / n, (n - 1).saturating_sub(g % n));
             let (Some(row), Some(zrow)) = (lv.get_mut(i), zint.get_mut(i)) else {
                 return Err(SearchFailure::Input(SnapshotError::Numerical));
             };
@@ -120,12 +121,12 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
             let here = level.after;
             if here + prior <= out.bound {
                 if k > 0 {
-                    g += 1;
+                    g = g.saturating_add(1);
                     self.enter(g, &mut lv, &mut zbar, &zint);
                     continue;
                 }
                 // baseline i complete
-                let descend = if i + 1 == M {
+                let descend = if i == M - 1 {
                     self.evaluate(&zint, here, &mut full, &mut out);
                     false
                 } else {
@@ -138,7 +139,7 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
                     open
                 };
                 if descend {
-                    g += 1;
+                    g = g.saturating_add(1);
                     self.enter(g, &mut lv, &mut zbar, &zint);
                 } else {
                     self.advance(g, &mut lv);
@@ -167,7 +168,8 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
         full: &mut impl FnMut(&[[T; N]; M]) -> Option<T>,
         out: &mut SearchOutcome<M, N, T>,
     ) {
-        out.evaluated += 1;
+        // (at most one per node: bounded by max_nodes)
+        out.evaluated = out.evaluated.saturating_add(1);
         if let Some(extra) = full(z) {
             let cost = here + extra;
             if cost.is_finite() {
@@ -207,7 +209,10 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
         if n == 0 {
             return;
         }
-        let (i, k) = ((g / n).min(M - 1), (n - 1 - g % n).min(N - 1));
+        let (i, k) = (
+            (g / n).min(M - 1),
+            ((n - 1).saturating_sub(g % n)).min(N - 1),
+        );
         if k == n - 1 {
             // conditional float of baseline i given the integers of baselines < i
             for c in 0..n {
@@ -255,7 +260,10 @@ impl<const M: usize, const N: usize, T: Real> IntegerSearch<'_, M, N, T> {
         if n == 0 {
             return;
         }
-        let (i, k) = ((g / n).min(M - 1), (n - 1 - g % n).min(N - 1));
+        let (i, k) = (
+            (g / n).min(M - 1),
+            ((n - 1).saturating_sub(g % n)).min(N - 1),
+        );
         let var = self.d_b[i] * self.dec.d[k];
         let level = &mut lv[i][k];
         level.z += level.step;
@@ -281,7 +289,11 @@ fn insert<const M: usize, const N: usize, T: Real>(
     best: &mut Vec<Candidate<M, N, T>, 2>,
     c: Candidate<M, N, T>,
 ) {
-    let position = best.iter().position(|b| c.cost < b.cost);
+    // (`position` keeps an overflow check on its counter; the range's index does not)
+    let position = (0..best.len())
+        .zip(best.iter())
+        .find(|(_, b)| c.cost < b.cost)
+        .map(|(i, _)| i);
     // behind the kept ones: appended while there is room, else no rival at all
     let Some(p) = position.or((!best.is_full()).then_some(best.len())) else {
         return;
@@ -289,6 +301,7 @@ fn insert<const M: usize, const N: usize, T: Real>(
     if best.is_full() {
         best.pop();
     }
-    // a slot is free and `p ≤ len`: the insertion cannot fail
-    let _ = best.insert(p, c);
+    // a slot is free and `p ≤ len`: the insertion cannot fail (the `min` shows the
+    // compiler the bound, which it cannot follow through the search above)
+    let _ = best.insert(p.min(best.len()), c);
 }

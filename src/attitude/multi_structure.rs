@@ -173,7 +173,8 @@ pub fn fuse<T: Real>(
     let mut inliers = [false; 3];
     let mut info = Matrix3::<T>::zeros();
     let mut info_theta = Vector3::<T>::zeros();
-    for (k, (e, inlier)) in estimates.iter().zip(inliers.iter_mut()).enumerate() {
+    // (indices from `0..3`, not `enumerate`: its counter keeps an overflow check)
+    for (k, (e, inlier)) in (0..3).zip(estimates.iter().zip(inliers.iter_mut())) {
         let Some(e) = e else { continue };
         let theta = log_so3(&(anchor.c_rb.transpose() * e.c_rb))?;
         let sound = !matches!(
@@ -198,7 +199,7 @@ pub fn fuse<T: Real>(
             *inlier = true;
         }
     }
-    let count = inliers.iter().filter(|&&i| i).count();
+    let count = crate::count(inliers.iter().filter(|&&i| i));
     let ch = Cholesky::new(symmetrize(&info)).ok_or(DcmError::NotPositiveDefinite)?;
     let theta = ch.solve(&info_theta);
     let covariance = ch.inverse() * real::<T>(count as f64);
@@ -208,7 +209,9 @@ pub fn fuse<T: Real>(
         .iter()
         .zip(inliers)
         .filter_map(|(e, i)| e.filter(|_| i))
-        .fold((T::zero(), 0u32), |(s, n), e| (s + e.nis, n + 1));
+        .fold((T::zero(), 0u32), |(s, n), e| {
+            (s + e.nis, n.saturating_add(1))
+        }); // (at most 3)
     let nis = sum / real::<T>(f64::from(n.max(1)));
     let q = (anchor.q_rb * Quaternion::from_rotation_vector(&theta)).normalize()?;
     let fused = FilterEstimate::from_rotation(q.to_dcm(), symmetrize(&covariance), nis, 6, health)?;
@@ -222,10 +225,8 @@ fn most_precise<'a, T: Real>(
     geometric_trace: &[T; 3],
     gated_only: bool,
 ) -> Option<(usize, &'a FilterEstimate<T>)> {
-    estimates
-        .iter()
-        .zip(geometric_trace)
-        .enumerate()
+    (0..3)
+        .zip(estimates.iter().zip(geometric_trace))
         .filter_map(|(k, (e, t))| e.as_ref().map(|e| (k, e, *t)))
         .filter(|(_, e, _)| !gated_only || e.health != FilterHealth::InnovationOutlier)
         .fold(

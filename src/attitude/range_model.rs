@@ -195,7 +195,7 @@ pub(crate) fn los_normal_matrix<T: Real>(
     let mut count = 0usize;
     for (s, w) in los_weights {
         n += s * s.transpose() * w;
-        count += 1;
+        count = count.saturating_add(1);
     }
     if count < 3 {
         return Err(SnapshotError::TooFewSatellites);

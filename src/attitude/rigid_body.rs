@@ -231,9 +231,9 @@ impl<T: Real> RigidBodyFilter<T> {
                 let y = c_pred.transpose() * zk - b - h * self.ekf.state();
                 let report = self.ekf.update(&y, &h, &r, gate)?;
                 nis += report.nis;
-                offered += 1;
+                offered = offered.saturating_add(1); // (at most one per baseline)
                 if !report.accepted {
-                    rejected += 1;
+                    rejected = rejected.saturating_add(1);
                 }
             }
         }
@@ -270,8 +270,8 @@ impl<T: Real> PairMeasurements<T> {
             *dv = present(epoch.velocity_difference(pair))?;
             *z = present(epoch.baseline(pair))?;
         }
-        if m.velocity_differences.iter().flatten().count() < 2
-            || m.baselines.iter().flatten().count() == 0
+        if crate::count(m.velocity_differences.iter().flatten()) < 2
+            || crate::count(m.baselines.iter().flatten()) == 0
         {
             return Err(DcmError::MissingBaseline);
         }

@@ -192,7 +192,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         let fit = self.range_gauss_newton(start.q_rb, sats, &weight, scale)?;
         let c_rb = fit.q_rb.to_dcm();
         let (chi_square, residual_rms) = self.residuals(&c_rb, sats, &weight, scale);
-        let count = M * sats.len();
+        let count = M.saturating_mul(sats.len());
         let covariance = fit
             .hessian
             .cholesky()
@@ -208,7 +208,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             SnapshotQuality::Good
         };
         let euler = Euler321::from_dcm(&c_rb)?;
-        let positive = (0..3).all(|i| covariance[(i, i)] > T::zero());
+        let positive = covariance.diagonal().iter().all(|&v| v > T::zero());
         let finite = covariance.iter().all(|v| v.is_finite())
             && residual_rms.is_finite()
             && chi_square.is_finite();
@@ -248,14 +248,14 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
                 sum_sq += *ei * *ei;
             }
             let mut q = T::zero();
-            for (i, &ei) in e.iter().enumerate() {
-                for (k, &ek) in e.iter().enumerate() {
+            for (i, &ei) in (0..e.len()).zip(e.iter()) {
+                for (k, &ek) in (0..e.len()).zip(e.iter()) {
                     q += ei * w_b[(i, k)] * ek;
                 }
             }
             chi_square += q * weight(s.sigma);
         }
-        let count = M * sats.len();
+        let count = M.saturating_mul(sats.len());
         (chi_square / scale, (sum_sq / real(count as f64)).sqrt())
     }
 
@@ -298,7 +298,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             }
             // C ← C exp([δ]×)
             q = (q * Quaternion::from_rotation_vector(&delta)).normalize()?;
-            iterations += 1;
+            iterations = iterations.saturating_add(1);
             if delta.norm() <= tolerance {
                 converged = true;
                 break;
@@ -352,8 +352,8 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
                 for ((ei, bi), &r) in e.iter_mut().zip(b.iter()).zip(s.range_diff.iter()) {
                     *ei = r - bi.dot(&u);
                 }
-                for (i, hi) in rows.iter().enumerate() {
-                    for (k, hk) in rows.iter().enumerate() {
+                for (i, hi) in (0..rows.len()).zip(rows.iter()) {
+                    for (k, hk) in (0..rows.len()).zip(rows.iter()) {
                         let wik = w[(i, k)] * wj;
                         h += hi * hk.transpose() * wik;
                         g += hi * (e[k] * wik);
@@ -370,7 +370,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
             let small = delta.norm() <= tolerance
                 || delta.norm_squared() <= chol.inverse().trace() * scale * real(1e-6);
             q = (q * Quaternion::from_rotation_vector(&delta)).normalize()?;
-            iterations += 1;
+            iterations = iterations.saturating_add(1);
             if small {
                 // the step was below rounding or far below the attitude uncertainty
                 converged = true;
@@ -399,10 +399,11 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
         let mut h = Matrix3::zeros();
         let mut g = Vector3::zeros();
         let mut cost = T::zero();
-        for (i, (bi, ai)) in b.iter().zip(a.iter()).enumerate() {
+        // (indices from `0..M`, not `enumerate`: its counter keeps an overflow check)
+        for (i, (bi, ai)) in (0..M).zip(b.iter().zip(a.iter())) {
             let ji = c * skew(bi);
             let ei = ai - c * bi;
-            for (k, (bk, ak)) in b.iter().zip(a.iter()).enumerate() {
+            for (k, (bk, ak)) in (0..M).zip(b.iter().zip(a.iter())) {
                 let wik = w[(i, k)];
                 let nj = info * (c * skew(bk));
                 let ne = info * (ak - c * bk);
@@ -508,7 +509,7 @@ fn least_squares_baselines<const M: usize, T: Real>(
     info_inv: &Matrix3<T>,
 ) -> [Vector3<T>; M] {
     let mut a = [Vector3::<T>::zeros(); M];
-    for (i, ai) in a.iter_mut().enumerate() {
+    for (i, ai) in (0..M).zip(a.iter_mut()) {
         let mut rhs = Vector3::zeros();
         for s in sats {
             if let Some(&r) = s.range_diff.get(i) {

@@ -310,7 +310,8 @@ impl<const N: usize, T: Real> Ekf<N, T> {
             nis: SVector::<T, M>::zeros(),
             accepted_mask: 0,
         };
-        for (i, (row, (&yi, &ri))) in h.row_iter().zip(y.iter().zip(r_diag.iter())).enumerate() {
+        // (row indices from `0..M`, not `enumerate`: its counter keeps an overflow check)
+        for (i, (row, (&yi, &ri))) in (0..M).zip(h.row_iter().zip(y.iter().zip(r_diag.iter()))) {
             // innovation of row i, corrected for what the earlier rows already moved x
             let yi = yi - (row * (self.x - x0)).x;
             let row = row.into_owned();

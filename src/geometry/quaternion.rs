@@ -168,7 +168,8 @@ impl<T: Real> Quaternion<T> {
         ];
         let mut best = 0usize;
         let mut best_value = one + trace;
-        for (i, &v) in candidates.iter().enumerate().skip(1) {
+        // (indices from `0..4`, not `enumerate`: its counter keeps an overflow check)
+        for (i, &v) in (0..4).zip(candidates.iter()).skip(1) {
             if v > best_value {
                 best = i;
                 best_value = v;

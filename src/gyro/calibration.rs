@@ -164,7 +164,8 @@ where
                 &self.correction,
             );
         }
-        self.samples += 1;
+        // (below u32::MAX: refused above)
+        self.samples = self.samples.saturating_add(1);
         Ok(())
     }
 
@@ -255,9 +256,12 @@ where
                     self.accumulator
                         .add_row(&eq.rows.row(i).transpose(), eq.rhs[i])?;
                 }
-                self.counters.used += 1;
+                // (statistics counters: they saturate rather than wrap)
+                self.counters.used = self.counters.used.saturating_add(1);
             }
-            EpochOutcome::Skipped(_) => self.counters.skipped_small_p0 += 1,
+            EpochOutcome::Skipped(_) => {
+                self.counters.skipped_small_p0 = self.counters.skipped_small_p0.saturating_add(1);
+            }
         }
         Ok(outcome)
     }
@@ -279,7 +283,7 @@ where
             return Err(CalibrationError::MidStep);
         }
         if angles.pitch.cos() < self.config.gimbal_lock_margin.sin() {
-            self.counters.skipped_gimbal_lock += 1;
+            self.counters.skipped_gimbal_lock = self.counters.skipped_gimbal_lock.saturating_add(1);
             return Ok(EpochOutcome::Skipped(SkipReason::NearGimbalLock));
         }
         self.add_reference(&angles.to_quaternion())

@@ -15,8 +15,9 @@ pub(crate) fn givens_inverse<T: Real, const N: usize>(
     // Row-major working copies: R (becomes upper triangular) and Qᵀ (starts as I).
     let mut r = [[T::zero(); N]; N];
     let mut qt = [[T::zero(); N]; N];
-    for (i, (row_r, row_q)) in r.iter_mut().zip(qt.iter_mut()).enumerate() {
-        for (j, (vr, vq)) in row_r.iter_mut().zip(row_q.iter_mut()).enumerate() {
+    // (indices from `0..N`, not `enumerate`: its counter keeps an overflow check)
+    for (i, (row_r, row_q)) in (0..N).zip(r.iter_mut().zip(qt.iter_mut())) {
+        for (j, (vr, vq)) in (0..N).zip(row_r.iter_mut().zip(row_q.iter_mut())) {
             *vr = a[(i, j)];
             if i == j {
                 *vq = T::one();
@@ -39,8 +40,8 @@ pub(crate) fn givens_inverse<T: Real, const N: usize>(
         }
     }
     let pivots = || {
-        r.iter()
-            .enumerate()
+        (0..N)
+            .zip(r.iter())
             .filter_map(|(i, row)| row.get(i))
             .map(|p| p.abs())
     };
@@ -56,7 +57,7 @@ pub(crate) fn givens_inverse<T: Real, const N: usize>(
         let pivot = *row.get(i)?;
         for col in 0..N {
             let mut acc = *qt.get(i)?.get(col)?;
-            for (kk, &rik) in row.iter().enumerate().skip(i + 1) {
+            for (kk, &rik) in (0..N).zip(row.iter()).skip(i + 1) {
                 acc -= rik * *x.get((kk, col))?;
             }
             *x.get_mut((i, col))? = acc / pivot;

@@ -106,7 +106,10 @@ impl BitSynchronizer {
                 return Err(BitError::OutOfOrder);
             }
             // only a change between consecutive epochs says where it happened
-            if epoch == last_epoch + 1 && positive != last_positive && self.edge.is_none() {
+            if last_epoch.checked_add(1) == Some(epoch)
+                && positive != last_positive
+                && self.edge.is_none()
+            {
                 self.count_change(epoch);
                 self.edge = self.decide();
             }
@@ -204,7 +207,9 @@ impl BitDecoder {
             self.last_epoch = Some(epoch);
             return Ok(None);
         };
-        let gap = self.last_epoch.is_some_and(|last| epoch != last + 1);
+        let gap = self
+            .last_epoch
+            .is_some_and(|last| last.checked_add(1) != Some(epoch));
         self.last_epoch = Some(epoch);
         let starts_bit = epoch % EPOCHS_PER_BIT == u64::from(edge);
         if gap && self.bit_start.is_some() && !starts_bit {
@@ -229,7 +234,8 @@ impl BitDecoder {
 
     fn accumulate(&mut self, prompt_i: f32) -> Option<DataBit> {
         self.sum += prompt_i;
-        self.count += 1;
+        // (restarted at every bit: at most EPOCHS_PER_BIT)
+        self.count = self.count.saturating_add(1);
         if self.count < EPOCHS_PER_BIT {
             return None;
         }

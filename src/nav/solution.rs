@@ -473,7 +473,7 @@ fn least_squares(
     config: &SolverConfig,
     atm: &Atmosphere,
 ) -> Result<LsSolution, FixError> {
-    let used = sats.iter().filter(|s| s.used).count();
+    let used = crate::count(sats.iter().filter(|s| s.used));
     if used < 4 {
         return Err(FixError::TooFewSatellites {
             available: used as u8,
@@ -682,7 +682,7 @@ fn velocity(
 ) -> Option<([f32; 4], [f32; 3])> {
     let mut normal = Matrix4::<f32>::zeros();
     let mut gradient = Vector4::<f32>::zeros();
-    let mut count = 0;
+    let mut count = 0u32;
     for s in sats.iter().filter(|s| s.used) {
         let Some(rate) = s.range_rate_m_s else {
             continue;
@@ -698,7 +698,7 @@ fn velocity(
         let h = Vector4::new(-r.u.x, -r.u.y, -r.u.z, 1.0);
         normal += h * h.transpose();
         gradient += h * y;
-        count += 1;
+        count = count.saturating_add(1);
     }
     if count < 4 {
         return None;

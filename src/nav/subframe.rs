@@ -221,8 +221,9 @@ impl SubframeSync {
     fn window_bits(&self, first: i64, len: u32) -> u32 {
         let mut out = 0u32;
         for i in 0..i64::from(len.min(32)) {
-            let j = first + i;
-            let k = (SUBFRAME_BITS as i64 - 1 - j).max(0) as u64;
+            // (small bit positions; saturating: the bounds are visible)
+            let j = first.saturating_add(i);
+            let k = (SUBFRAME_BITS as i64 - 1).saturating_sub(j).max(0) as u64;
             out = (out << 1) | u32::from(self.bit_back(k));
         }
         out

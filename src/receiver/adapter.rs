@@ -126,7 +126,7 @@ pub fn observation_from_epoch(
         QuadratureSign::Conjugate => -1.0,
     };
     let mut prompt = PromptIq::<f32>::default();
-    for (p, &input) in mapping.inputs.iter().enumerate() {
+    for (p, &input) in (0..mapping.inputs.len()).zip(mapping.inputs.iter()) {
         let (Some(taps), Some(&var)) = (
             epoch.correlations.taps.get(input),
             noise_variance.get(input),

@@ -37,7 +37,8 @@ impl AntennaMonitor {
         if !(strongest > 0.0) {
             return changes;
         }
-        for (i, (p, b)) in self.power.iter().zip(self.blocked.iter_mut()).enumerate() {
+        // (indices from `0..3`, not `enumerate`: its counter keeps an overflow check)
+        for (i, (p, b)) in (0..3).zip(self.power.iter().zip(self.blocked.iter_mut())) {
             let next = if *b {
                 *p < 2.0 * ratio * strongest
             } else {

@@ -101,7 +101,8 @@ pub(crate) fn cold_start(
         }
     };
     let mut out = Vec::new();
-    for (j, slot) in slots.iter().enumerate() {
+    // (indices from a range, not `enumerate`: its counter keeps an overflow check)
+    for (j, slot) in (0..slots.len()).zip(slots.iter()) {
         let k = [
             fix.ambiguities[0].get(j).copied()?.saturating_add(whole[0]),
             fix.ambiguities[1].get(j).copied()?.saturating_add(whole[1]),

@@ -184,7 +184,7 @@ impl EpochBuffer {
 
     /// Empty buckets for epochs `first` and `first + 1`.
     fn reset(&mut self, first: u64) {
-        for (i, b) in self.buckets.iter_mut().enumerate() {
+        for (i, b) in (0..2).zip(self.buckets.iter_mut()) {
             let epoch = if (first % 2) as usize == i {
                 first
             } else {

@@ -68,7 +68,8 @@ pub(crate) struct GyroFrame {
     pub report: CalibrationReport,
 }
 
-/// What the gyro calibration windows have given so far.
+/// What the gyro calibration windows have given so far (statistics counters: they saturate at
+/// `u32::MAX` rather than wrap).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CalibrationReport {
@@ -181,7 +182,7 @@ impl GyroFrame {
         if let Some(c) = calibrator.as_mut() {
             if !plausible || c.push_increment(theta).is_err() {
                 calibrator = None;
-                self.report.failed += 1;
+                self.report.failed = self.report.failed.saturating_add(1);
             }
         }
         self.propagator = propagator;
@@ -199,7 +200,7 @@ impl GyroFrame {
     pub fn attitude_at(&self, t: f64) -> Quaternion<f32> {
         let h = seconds(self.config.sample_interval_s);
         // the propagator holds M at the last completed step
-        let step_samples = self.samples - self.samples % 2;
+        let step_samples = self.samples & !1; // (the last even count)
         let t_step = step_samples as f64 * h;
         let dt = ((t - t_step) as f32).clamp(-MAX_EXTRAPOLATION_S, MAX_EXTRAPOLATION_S);
         let m = self.propagator.attitude() * Quaternion::from_rotation_vector(&(self.rate * dt));
@@ -238,11 +239,11 @@ impl GyroFrame {
         match c {
             Ok(c) => {
                 self.calibrator = Some(c);
-                self.report.started += 1;
+                self.report.started = self.report.started.saturating_add(1);
             }
             Err(_) => {
                 self.calibrator = None;
-                self.report.failed += 1;
+                self.report.failed = self.report.failed.saturating_add(1);
             }
         }
         self.window_start = self.samples;
@@ -264,7 +265,7 @@ impl GyroFrame {
             Ok(EpochOutcome::Used(_)) | Ok(EpochOutcome::Skipped(_)) => {}
             Err(_) => {
                 self.calibrator = None;
-                self.report.failed += 1;
+                self.report.failed = self.report.failed.saturating_add(1);
                 return false;
             }
         }
@@ -276,7 +277,7 @@ impl GyroFrame {
         }
         let applied = match c.solve() {
             Ok(est) => {
-                self.report.solved += 1;
+                self.report.solved = self.report.solved.saturating_add(1);
                 self.report.last_bias = [est.c.x, est.c.y, est.c.z];
                 self.report.last_sigma = [est.c_std.x, est.c_std.y, est.c_std.z];
                 let usable = est.c.iter().all(|v| v.is_finite())
@@ -286,13 +287,13 @@ impl GyroFrame {
                         .all(|&s| s <= self.config.calibration_max_sigma);
                 if usable {
                     // reported (the fine filter estimates the bias it applies itself)
-                    self.calibrations += 1;
-                    self.report.applied += 1;
+                    self.calibrations = self.calibrations.saturating_add(1);
+                    self.report.applied = self.report.applied.saturating_add(1);
                 }
                 usable
             }
             Err(_) => {
-                self.report.failed += 1;
+                self.report.failed = self.report.failed.saturating_add(1);
                 false
             }
         };

@@ -140,7 +140,9 @@ impl IntegrityMonitor {
         }
         let dof = 2.0 * f32::from(report.offered);
         let nis = (report.nis_sum + report.rejected_nis_sum) / dof;
-        let rejected = f32::from(report.offered - report.accepted) / f32::from(report.offered);
+        // (accepted ≤ offered: the saturation never acts)
+        let rejected =
+            f32::from(report.offered.saturating_sub(report.accepted)) / f32::from(report.offered);
         if self.primed {
             self.nis += NIS_GAIN * (nis - self.nis);
             self.rejected += NIS_GAIN * (rejected - self.rejected);

@@ -250,7 +250,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     /// Closes `prn`'s channel; true when there was one.
     pub fn release(&mut self, prn: Prn) -> bool {
         let before = self.channels.len();
-        self.channels.retain(|(_, s)| s.prn != prn);
+        retain(&mut self.channels, |(_, s)| s.prn != prn);
         self.channels.len() < before
     }
 
@@ -321,7 +321,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         let phantoms = self.check_cross_correlations();
         let limit = self.config.release_after_samples;
         let before = self.channels.len();
-        self.channels.retain(|(c, s)| {
+        retain(&mut self.channels, |(c, s)| {
             now.saturating_sub(s.last_lock_sample) < limit && !c.is_cross_correlation()
         });
         report.released =
@@ -374,6 +374,25 @@ fn sub_block<'a>(
         SampleBlock::real(block.first_sample(), i)
     };
     made.map_err(|e| ReceiverError::Tracking(crate::tracking::TrackingError::Signal(e)))
+}
+
+/// Keeps the items for which `keep` holds, in order (as `heapless::Vec::retain`, whose
+/// counters keep overflow checks the optimizer cannot discharge): a stable in-place
+/// compaction by swaps, then the rest dropped.
+fn retain<T, const N: usize>(items: &mut Vec<T, N>, mut keep: impl FnMut(&T) -> bool) {
+    let mut kept = 0usize;
+    for i in 0..items.len() {
+        if items.get(i).is_some_and(&mut keep) {
+            // (kept ≤ i: the range is never empty; its ends swap, nothing when kept = i)
+            if let Some((first, rest)) = items.get_mut(kept..=i).and_then(|s| s.split_first_mut()) {
+                if let Some(last) = rest.last_mut() {
+                    core::mem::swap(first, last);
+                }
+            }
+            kept = kept.saturating_add(1); // (at most i + 1)
+        }
+    }
+    items.truncate(kept);
 }
 
 #[cfg(test)]

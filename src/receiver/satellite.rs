@@ -347,7 +347,7 @@ impl Slot {
     pub fn add_epoch(&mut self, epoch: u64, z: &[Complex<f32>; 3], cn0_dbhz: f32) -> bool {
         let [za, zb, zc] = *z;
         let b = &mut self.block;
-        for (k, zp) in [zb, zc].into_iter().enumerate() {
+        for (k, zp) in (0..2).zip([zb, zc]) {
             let product = zp * za.conj();
             b.product[k] += product;
             b.magnitude[k] += libm::sqrtf(product.norm_sqr());
@@ -355,7 +355,7 @@ impl Slot {
         for (p, zp) in b.power.iter_mut().zip(z.iter()) {
             *p += zp.norm_sqr();
         }
-        b.epochs += 1;
+        b.epochs = b.epochs.saturating_add(1); // (a block's epochs: far below u32::MAX)
         self.cn0_dbhz = cn0_dbhz;
         self.last_epoch = Some(epoch);
         self.bits.update(epoch, za.re)
@@ -459,7 +459,7 @@ impl Slot {
         }
         w.s_t += tau;
         w.s_tt += tau * tau;
-        w.blocks += 1;
+        w.blocks = w.blocks.saturating_add(1); // (a window's blocks: far below u32::MAX)
     }
 
     /// Closes the window at `centre_epoch` and starts the next one; `None` when it had too

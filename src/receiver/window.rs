@@ -65,7 +65,7 @@ impl AttitudeReceiver {
             self.run_rigid_body(k, &windows);
         }
         self.review_excluded_gyro(k);
-        self.health.satellites_fixed = self.slots.iter().filter(|s| s.fixed()).count() as u8;
+        self.health.satellites_fixed = crate::count(self.slots.iter().filter(|s| s.fixed())) as u8;
         self.health.line_bias_rad = self.line_bias.rad;
         self.health.line_bias_sigma_rad = self.line_bias.sigma_rad;
     }
@@ -75,7 +75,8 @@ impl AttitudeReceiver {
         let cfg = self.config;
         let window = u64::from(cfg.window_epochs);
         let mut windows = Vec::new();
-        for (i, s) in self.slots.iter_mut().enumerate() {
+        // (indices from a range, not `enumerate`: its counter keeps an overflow check)
+        for (i, s) in (0..self.slots.len()).zip(self.slots.iter_mut()) {
             let stale = s.last_epoch.is_some_and(|e| e.saturating_add(window) <= k);
             if let Some(w) = s.close_window(centre, &cfg) {
                 // (one window per slot: at most MAX_SATELLITES)
@@ -110,10 +111,7 @@ impl AttitudeReceiver {
         m_centre: &Quaternion<f32>,
     ) {
         let cfg = self.config;
-        let candidates = windows
-            .iter()
-            .filter(|(_, w)| w.valid == [true, true])
-            .count();
+        let candidates = crate::count(windows.iter().filter(|(_, w)| w.valid == [true, true]));
         if candidates < usize::from(cfg.min_cold_start_satellites) || self.any_blocked() {
             return;
         }
@@ -244,7 +242,8 @@ impl AttitudeReceiver {
                 let slip = match s.ambiguity[p] {
                     Some(kk) if (offset - kk as f32).abs() > slip_threshold => {
                         s.ambiguity[p] = clean.then_some(nearest as i32);
-                        clean.then_some(nearest as i32 - kk)
+                        // (saturating: the event clamps the count to ±127 anyway)
+                        clean.then_some((nearest as i32).saturating_sub(kk))
                     }
                     Some(_) => None,
                     None if clean => {
@@ -253,7 +252,7 @@ impl AttitudeReceiver {
                         // re-fix tells whether whole cycles were lost
                         s.dropped[p]
                             .take()
-                            .map(|old| nearest as i32 - old)
+                            .map(|old| (nearest as i32).saturating_sub(old))
                             .filter(|&c| c != 0)
                     }
                     None => None,

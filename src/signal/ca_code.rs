@@ -153,7 +153,8 @@ impl Prn {
 
     /// Index into per-PRN tables, 0–31.
     pub const fn index(self) -> usize {
-        (self.0 as usize - 1) & (PRN_COUNT - 1)
+        // (1–32 by construction; wrapping keeps the mask's result for any value)
+        (self.0 as usize).wrapping_sub(1) & (PRN_COUNT - 1)
     }
 
     /// The packed code bits of this PRN.

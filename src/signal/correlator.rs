@@ -396,7 +396,7 @@ impl<const A: usize> Correlator<A> {
             self.epoch_carrier_phase = self.carrier_total;
         }
         self.correlate_span(block, start, n);
-        *cursor = start + n;
+        *cursor = start.saturating_add(n); // (n ≤ len − start: never saturates)
         if (n as u64) < to_wrap {
             return Ok(None);
         }
@@ -439,15 +439,21 @@ impl<const A: usize> Correlator<A> {
                 self.carrier.step,
             );
             let back = (d as u64).wrapping_mul(step) % CODE_WRAP;
-            let code_start = (self.code.phase + CODE_WRAP - back) % CODE_WRAP;
+            // (the phase stays below CODE_WRAP + CHUNK steps, far from 2⁶⁴: the wrapping forms
+            // never wrap; a phase arithmetic modulo CODE_WRAP, as in release)
+            let code_start = self.code.phase.wrapping_add(CODE_WRAP).wrapping_sub(back) % CODE_WRAP;
             fill_code(
                 code.get_mut(..m + 2 * d).unwrap_or_default(),
                 self.prn,
                 code_start,
                 step,
             );
-            let noise_start =
-                (self.code.phase + CODE_WRAP - self.noise_delay % CODE_WRAP) % CODE_WRAP;
+            let noise_start = self
+                .code
+                .phase
+                .wrapping_add(CODE_WRAP)
+                .wrapping_sub(self.noise_delay % CODE_WRAP)
+                % CODE_WRAP;
             fill_code(
                 noise.get_mut(..m).unwrap_or_default(),
                 self.prn,
@@ -463,7 +469,7 @@ impl<const A: usize> Correlator<A> {
                 noise: noise.get(..m).unwrap_or_default(),
             };
             for (a, acc) in self.acc.iter_mut().enumerate() {
-                let Some((i, q)) = block.span(a, start + done, m) else {
+                let Some((i, q)) = block.span(a, start.saturating_add(done), m) else {
                     continue;
                 };
                 let part = if a > 0 && self.slave_taps == SlaveTaps::Prompt {
@@ -475,11 +481,11 @@ impl<const A: usize> Correlator<A> {
                     *x = x.wrapping_add(*p);
                 }
             }
-            self.code.phase += (m as u64) * step;
+            self.code.phase = self.code.phase.wrapping_add((m as u64).wrapping_mul(step));
             let advance = i64::from(self.carrier.step as i32) * m as i64;
             self.carrier_total = self.carrier_total.wrapping_add(advance);
             self.samples = self.samples.saturating_add(m as u32);
-            done += m;
+            done = done.saturating_add(m);
         }
     }
 }

@@ -51,7 +51,8 @@ pub(crate) fn fill_code(out: &mut [i16], prn: Prn, phase: u64, step: u64) {
         let mut ph = phase;
         for r in head.iter_mut() {
             *r = i16::from(table[(ph >> 32) as usize & 1023]);
-            ph += step;
+            // (below CODE_WRAP + one step within a pass, far from 2⁶⁴: never wraps)
+            ph = ph.wrapping_add(step);
         }
         phase = ph.checked_sub(CODE_WRAP).unwrap_or(ph) % CODE_WRAP;
         rest = tail;
@@ -114,6 +115,22 @@ pub(crate) fn correlate_antenna(
     }
 }
 
+/// `Re(x · (c − js))` of a sample `x = i + jq`: fits `i16` (|x| ≤ 128 per component, the
+/// carrier ≤ [`CARRIER_AMPLITUDE`](super::nco::CARRIER_AMPLITUDE): at most 2·128·127 = 32 512);
+/// the wrapping forms tell the compiler, which cannot see the tables' bound, and never wrap.
+/// So for every sum of these kernels: a chunk of [`CHUNK`](super::correlator::CHUNK) products
+/// of at most 32 512 fits `i32` by far.
+#[inline(always)]
+fn mix_i(i: i16, q: i16, c: i16, s: i16) -> i16 {
+    i.wrapping_mul(c).wrapping_add(q.wrapping_mul(s))
+}
+
+/// `Im(x · (c − js))`, as [`mix_i`].
+#[inline(always)]
+fn mix_q(i: i16, q: i16, c: i16, s: i16) -> i16 {
+    q.wrapping_mul(c).wrapping_sub(i.wrapping_mul(s))
+}
+
 /// Prompt only (slaved antennas): `[0, 0, P_I, P_Q, 0, 0, 0, 0]`, one fused pass (few
 /// registers on every target).
 #[inline]
@@ -124,15 +141,17 @@ pub(crate) fn correlate_prompt(xi: &[i8], xq: Option<&[i8]>, r: &Replica<'_>) ->
             for ((((&i, &q), &c), &s), &p) in xi.iter().zip(xq).zip(r.cos).zip(r.sin).zip(r.prompt)
             {
                 let (i, q) = (i16::from(i), i16::from(q));
-                pi += i32::from(i * c + q * s) * i32::from(p);
-                pq += i32::from(q * c - i * s) * i32::from(p);
+                pi = pi.wrapping_add(i32::from(mix_i(i, q, c, s)).wrapping_mul(i32::from(p)));
+                pq = pq.wrapping_add(i32::from(mix_q(i, q, c, s)).wrapping_mul(i32::from(p)));
             }
         }
         None => {
             for (((&i, &c), &s), &p) in xi.iter().zip(r.cos).zip(r.sin).zip(r.prompt) {
                 let i = i16::from(i);
-                pi += i32::from(i * c) * i32::from(p);
-                pq += i32::from(-i * s) * i32::from(p);
+                pi = pi.wrapping_add(i32::from(i.wrapping_mul(c)).wrapping_mul(i32::from(p)));
+                pq = pq.wrapping_add(
+                    i32::from(i.wrapping_neg().wrapping_mul(s)).wrapping_mul(i32::from(p)),
+                );
             }
         }
     }
@@ -155,15 +174,15 @@ fn correlate_complex(xi: &[i8], xq: &[i8], r: &Replica<'_>) -> [i32; 8] {
         .zip(r.noise);
     for (((((((&i, &q), &c), &s), &e), &p), &l), &z) in it {
         let (i, q) = (i16::from(i), i16::from(q));
-        let (mi, mq) = (i32::from(i * c + q * s), i32::from(q * c - i * s));
-        a[0] += mi * i32::from(e);
-        a[1] += mq * i32::from(e);
-        a[2] += mi * i32::from(p);
-        a[3] += mq * i32::from(p);
-        a[4] += mi * i32::from(l);
-        a[5] += mq * i32::from(l);
-        a[6] += mi * i32::from(z);
-        a[7] += mq * i32::from(z);
+        let (mi, mq) = (i32::from(mix_i(i, q, c, s)), i32::from(mix_q(i, q, c, s)));
+        a[0] = a[0].wrapping_add(mi.wrapping_mul(i32::from(e)));
+        a[1] = a[1].wrapping_add(mq.wrapping_mul(i32::from(e)));
+        a[2] = a[2].wrapping_add(mi.wrapping_mul(i32::from(p)));
+        a[3] = a[3].wrapping_add(mq.wrapping_mul(i32::from(p)));
+        a[4] = a[4].wrapping_add(mi.wrapping_mul(i32::from(l)));
+        a[5] = a[5].wrapping_add(mq.wrapping_mul(i32::from(l)));
+        a[6] = a[6].wrapping_add(mi.wrapping_mul(i32::from(z)));
+        a[7] = a[7].wrapping_add(mq.wrapping_mul(i32::from(z)));
     }
     a
 }
@@ -183,15 +202,18 @@ fn correlate_real(xi: &[i8], r: &Replica<'_>) -> [i32; 8] {
         .zip(r.noise);
     for ((((((&i, &c), &s), &e), &p), &l), &z) in it {
         let i = i16::from(i);
-        let (mi, mq) = (i32::from(i * c), i32::from(-i * s));
-        a[0] += mi * i32::from(e);
-        a[1] += mq * i32::from(e);
-        a[2] += mi * i32::from(p);
-        a[3] += mq * i32::from(p);
-        a[4] += mi * i32::from(l);
-        a[5] += mq * i32::from(l);
-        a[6] += mi * i32::from(z);
-        a[7] += mq * i32::from(z);
+        let (mi, mq) = (
+            i32::from(i.wrapping_mul(c)),
+            i32::from(i.wrapping_neg().wrapping_mul(s)),
+        );
+        a[0] = a[0].wrapping_add(mi.wrapping_mul(i32::from(e)));
+        a[1] = a[1].wrapping_add(mq.wrapping_mul(i32::from(e)));
+        a[2] = a[2].wrapping_add(mi.wrapping_mul(i32::from(p)));
+        a[3] = a[3].wrapping_add(mq.wrapping_mul(i32::from(p)));
+        a[4] = a[4].wrapping_add(mi.wrapping_mul(i32::from(l)));
+        a[5] = a[5].wrapping_add(mq.wrapping_mul(i32::from(l)));
+        a[6] = a[6].wrapping_add(mi.wrapping_mul(i32::from(z)));
+        a[7] = a[7].wrapping_add(mq.wrapping_mul(i32::from(z)));
     }
     a
 }
@@ -209,8 +231,8 @@ fn mix_complex(xi: &[i8], xq: &[i8], cos: &[i16], sin: &[i16], mi: &mut [i16], m
         .zip(mq.iter_mut());
     for (((((&i, &q), &c), &s), oi), oq) in it {
         let (i, q) = (i16::from(i), i16::from(q));
-        *oi = i * c + q * s;
-        *oq = q * c - i * s;
+        *oi = mix_i(i, q, c, s);
+        *oq = mix_q(i, q, c, s);
     }
 }
 
@@ -226,8 +248,8 @@ fn mix_real(xi: &[i8], cos: &[i16], sin: &[i16], mi: &mut [i16], mq: &mut [i16])
         .zip(mq.iter_mut());
     for ((((&i, &c), &s), oi), oq) in it {
         let i = i16::from(i);
-        *oi = i * c;
-        *oq = -i * s;
+        *oi = i.wrapping_mul(c);
+        *oq = i.wrapping_neg().wrapping_mul(s);
     }
 }
 
@@ -240,10 +262,10 @@ fn taps_pair(mi: &[i16], mq: &[i16], a: &[i16], b: &[i16]) -> [i32; 4] {
     let mut acc = [0i32; 4];
     let w = |x: i16| i32::from(x);
     for (((&xi, &xq), &ca), &cb) in mi.iter().zip(mq).zip(a).zip(b) {
-        acc[0] += w(xi) * w(ca);
-        acc[1] += w(xq) * w(ca);
-        acc[2] += w(xi) * w(cb);
-        acc[3] += w(xq) * w(cb);
+        acc[0] = acc[0].wrapping_add(w(xi).wrapping_mul(w(ca)));
+        acc[1] = acc[1].wrapping_add(w(xq).wrapping_mul(w(ca)));
+        acc[2] = acc[2].wrapping_add(w(xi).wrapping_mul(w(cb)));
+        acc[3] = acc[3].wrapping_add(w(xq).wrapping_mul(w(cb)));
     }
     acc
 }

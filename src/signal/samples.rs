@@ -179,13 +179,14 @@ impl SampleFormat {
                 }
             }
             Self::SignMagnitude2 { complex: false } => {
-                for (k, v) in i.iter_mut().enumerate() {
+                // (indices from a range, not `enumerate`: its counter keeps an overflow check)
+                for (k, v) in (0..i.len()).zip(i.iter_mut()) {
                     let byte = bytes.get(k >> 2).copied().unwrap_or(0);
                     *v = sign_magnitude(byte >> (6 - 2 * (k & 3)));
                 }
             }
             Self::SignMagnitude2 { complex: true } => {
-                for (k, (vi, vq)) in i.iter_mut().zip(q.iter_mut()).enumerate() {
+                for (k, (vi, vq)) in (0..i.len()).zip(i.iter_mut().zip(q.iter_mut())) {
                     // Sample k's I field is field 2k, its Q field 2k + 1; two samples a byte.
                     let byte = bytes.get(k >> 1).copied().unwrap_or(0);
                     let shift = if k & 1 == 0 { 4 } else { 0 };
@@ -194,7 +195,7 @@ impl SampleFormat {
                 }
             }
             Self::Sign1 => {
-                for (k, v) in i.iter_mut().enumerate() {
+                for (k, v) in (0..i.len()).zip(i.iter_mut()) {
                     let byte = bytes.get(k >> 3).copied().unwrap_or(0);
                     *v = 1 - 2 * ((byte >> (7 - (k & 7))) & 1) as i8;
                 }
@@ -225,6 +226,7 @@ pub const fn sign_magnitude(field: u8) -> i8 {
 #[inline(always)]
 fn reduce16(v: i16, shift: u8) -> i8 {
     let v = i32::from(v);
+    let shift = shift.min(8); // (as documented; the bound made visible)
     let r = if shift == 0 {
         v
     } else {

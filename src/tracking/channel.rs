@@ -410,7 +410,7 @@ impl<const A: usize> Channel<A> {
         if let Some(z) = self.squares.get_mut(self.index as usize) {
             *z = [i * i - q * q, 2.0 * i * q];
         }
-        if (self.index as usize) + 1 < REFINEMENT_EPOCHS {
+        if (self.index as usize) < REFINEMENT_EPOCHS - 1 {
             return self.acquired_doppler;
         }
         // Residual at the window's centre (epoch (n − 1)/2) and rate; the next epoch is
@@ -467,11 +467,15 @@ impl<const A: usize> Channel<A> {
         }
         self.bit_sync.add(self.index, prompt_i);
         let edge = self.bit_sync.edge()?;
-        let position = (self.index + EPOCHS_PER_BIT - u32::from(edge)) % EPOCHS_PER_BIT;
+        // (each term reduced first: the sum's bound visible, the same value mod 20)
+        let position = (self.index % EPOCHS_PER_BIT + EPOCHS_PER_BIT
+            - u32::from(edge) % EPOCHS_PER_BIT)
+            % EPOCHS_PER_BIT;
         if position == 0 {
             self.bit_sum = 0;
         }
-        self.bit_sum += i64::from(prompt_i);
+        // (20 prompts of i32: far inside i64, the saturation never acts)
+        self.bit_sum = self.bit_sum.saturating_add(i64::from(prompt_i));
         (position == EPOCHS_PER_BIT - 1).then_some(if self.bit_sum >= 0 { 1 } else { -1 })
     }
 

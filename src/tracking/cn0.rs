@@ -86,7 +86,8 @@ impl PowerWindow {
         self.sum_q2 += q * q * POWER_SCALE;
         self.sum_n2 += noise.power() * POWER_SCALE;
         self.sum_el2 += prompt.power() * POWER_SCALE;
-        self.count += 1;
+        // (epochs in the window: saturates rather than wraps)
+        self.count = self.count.saturating_add(1);
     }
 
     /// Adds one epoch of the reference antenna's taps over `samples` samples (`complex`:
@@ -101,7 +102,8 @@ impl PowerWindow {
         let amplitude = f32::from(CARRIER_AMPLITUDE);
         self.sum_floor +=
             amplitude * amplitude * samples as f32 * components * ROUNDING_NOISE_LSB2 * POWER_SCALE;
-        self.count += 1;
+        // (epochs in the window: saturates rather than wraps)
+        self.count = self.count.saturating_add(1);
     }
 
     /// Epochs in the window.

@@ -188,7 +188,9 @@ impl BitSync {
                         second = h;
                     }
                 }
-                if u32::from(best) * 2 >= u32::from(self.transitions) && best >= 4 * second {
+                if u32::from(best) * 2 >= u32::from(self.transitions)
+                    && u32::from(best) >= 4 * u32::from(second)
+                {
                     self.edge = Some(at as u8);
                 }
             }

@@ -78,7 +78,8 @@ pub fn refine_frequency_and_rate(squares: &[[f32; 2]], t: f32, max_rate_hz_s: f3
 /// phase is `2 · ½ ḟ t²` cycles: twice the carrier's).
 fn dechirp(squares: &[[f32; 2]], out: &mut [[f32; 2]], t: f32, rate: f32) {
     let centre = 0.5 * (out.len().saturating_sub(1)) as f32;
-    for (k, (z, o)) in squares.iter().zip(out.iter_mut()).enumerate() {
+    // (indices from a range, not `enumerate`: its counter keeps an overflow check)
+    for (k, (z, o)) in (0..squares.len()).zip(squares.iter().zip(out.iter_mut())) {
         let dt = (k as f32 - centre) * t;
         // Phase in cycles, reduced before the trigonometry (|ḟ dt²| ≤ 150 · 0.0164 cycles).
         let cycles = rate * dt * dt;
@@ -91,7 +92,7 @@ fn dechirp(squares: &[[f32; 2]], out: &mut [[f32; 2]], t: f32, rate: f32) {
 /// The peak of `|Σ_k Z_k² e^{−j2π(2δ)kt}|` for `δ` on a 1 Hz grid over `centre ± range`,
 /// refined by a parabola. Bounded: `2·range + 1` candidates × `squares.len()` terms.
 fn search(squares: &[[f32; 2]], t: f32, centre: f32, range: f32) -> f32 {
-    let steps = (2.0 * range) as usize + 1;
+    let steps = ((2.0 * range) as usize).saturating_add(1);
     let first = libm::roundf(centre) - range;
     let mut best = (0.0f32, 0usize);
     let mut around = [0.0f32; 3];
@@ -114,14 +115,14 @@ fn search(squares: &[[f32; 2]], t: f32, centre: f32, range: f32) -> f32 {
             best = (m, c);
             around = [previous[1], m, 0.0];
         }
-        if c == best.1 + 1 {
+        if best.1.checked_add(1) == Some(c) {
             around[2] = m;
         }
         previous = [previous[1], m];
     }
     let [a, b, c] = around;
     let curvature = 2.0 * b - a - c;
-    let offset = if curvature > 0.0 && best.1 > 0 && best.1 + 1 < steps {
+    let offset = if curvature > 0.0 && best.1 > 0 && best.1 < steps - 1 {
         (0.5 * (c - a) / curvature).clamp(-0.5, 0.5)
     } else {
         0.0

@@ -84,10 +84,11 @@ pub fn code_cross_correlation(
     let p0 = w * (0.5 - frac);
     let (mut pr, mut pi) = (libm::cosf(p0), libm::sinf(p0));
     let (mut sr, mut si) = (0.0f32, 0.0f32);
-    let mut j = first;
-    let mut jb = (first + n) % CA_CODE_LENGTH;
-    for _ in 0..CA_CODE_LENGTH {
-        let jb1 = if jb + 1 == CA_CODE_LENGTH { 0 } else { jb + 1 };
+    // (chip indices from the loop's count, modulo the code: every sum's bound visible)
+    for s in 0..CA_CODE_LENGTH {
+        let j = (first + s) % CA_CODE_LENGTH;
+        let jb = (first + n + s) % CA_CODE_LENGTH;
+        let jb1 = (first + n + s + 1) % CA_CODE_LENGTH;
         let x = f32::from(ca.get(j).copied().unwrap_or(1));
         let y0 = f32::from(cb.get(jb).copied().unwrap_or(1));
         let y1 = f32::from(cb.get(jb1).copied().unwrap_or(1));
@@ -97,8 +98,6 @@ pub fn code_cross_correlation(
         let r = pr * wc - pi * ws;
         pi = pr * ws + pi * wc;
         pr = r;
-        j = if j + 1 == CA_CODE_LENGTH { 0 } else { j + 1 };
-        jb = jb1;
     }
     let scale = 1.0 / CA_CODE_LENGTH as f32;
     (sr * sr + si * si) * scale * scale
@@ -213,14 +212,14 @@ pub fn cross_correlation_source(
     for (slot, other) in contributions.iter_mut().zip(stronger) {
         let x = other.power * (largest_fraction(victim, other, test) - MEAN_FRACTION).max(0.0);
         *slot = (x, other.doppler_hz);
-        count += 1;
+        count = count.saturating_add(1); // (at most MAX_OTHERS)
         if strongest.is_none_or(|(_, s)| x > s) {
             strongest = Some((other.prn, x));
         }
     }
     let used = contributions.get(..count).unwrap_or(&[]);
     let mut predicted: f32 = used.iter().map(|c| c.0).sum();
-    for (k, a) in used.iter().enumerate() {
+    for (k, a) in (0..used.len()).zip(used) {
         for b in used.iter().skip(k + 1) {
             if near_khz_multiple(a.1, b.1, test.coherence_hz) {
                 predicted += 2.0 * libm::sqrtf(a.0 * b.0);

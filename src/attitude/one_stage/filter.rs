@@ -343,7 +343,8 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
 
 /// Zeroes the information of parameters that are not estimated.
 fn mask<T: Real>(info: &mut EpochInformation<T>, active: &[bool; PARAMETERS]) {
-    for (k, &on) in active.iter().enumerate() {
+    // (indices from a range, not `enumerate`: its counter keeps an overflow check)
+    for (k, &on) in (0..PARAMETERS).zip(active.iter()) {
         if !on {
             info.gradient[k] = T::zero();
             info.observed.row_mut(k).fill(T::zero());

@@ -83,23 +83,23 @@ fn indices<T>(
     let angles = config.estimate.as_array();
     let mut parameter = [None; PARAMETERS];
     let mut rate = [None; 3];
-    let mut next = 0;
+    let mut next = 0usize;
     for (slot, &on) in parameter.iter_mut().zip(angles.iter()) {
         if on {
             *slot = Some(next);
-            next += 1;
+            next = next.saturating_add(1); // (at most PARAMETERS + 3)
         }
     }
     for (slot, &on) in rate.iter_mut().zip(angles.iter()) {
         if on {
             *slot = Some(next);
-            next += 1;
+            next = next.saturating_add(1); // (at most PARAMETERS + 3)
         }
     }
     if config.line_bias_states {
         for slot in parameter.iter_mut().skip(3) {
             *slot = Some(next);
-            next += 1;
+            next = next.saturating_add(1); // (at most PARAMETERS + 3)
         }
     }
     (parameter, rate, next)

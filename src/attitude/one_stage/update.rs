@@ -64,7 +64,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
                 } else {
                     SVector::zeros()
                 };
-                for (k, slot) in self.scheduled_psd.iter_mut().enumerate() {
+                for (k, slot) in (0..self.scheduled_psd.len()).zip(self.scheduled_psd.iter_mut()) {
                     let j = if k < 3 { angles.get(k) } else { all.get(k) };
                     // information rate J / T, 1/rad²/s
                     let rate = j.copied().unwrap_or_else(T::zero) / t;

@@ -105,10 +105,7 @@ pub struct ObservabilityReport<const X: usize, T = f32> {
 impl<const X: usize, T: Real> ObservabilityReport<X, T> {
     /// The report for the singular values `s` of `U` and `s_eq` of `U D⁻¹`.
     pub(crate) fn new(s: SVector<T, X>, s_eq: SVector<T, X>, rank_tolerance: T) -> Self {
-        let rank = s_eq
-            .iter()
-            .filter(|v| **v > rank_tolerance * s_eq.max())
-            .count();
+        let rank = crate::count(s_eq.iter().filter(|v| **v > rank_tolerance * s_eq.max()));
         Self {
             singular_values: s,
             rank,

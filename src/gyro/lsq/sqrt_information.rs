@@ -106,18 +106,18 @@ impl<const X: usize, T: Real> SqrtInformation<X, T> {
     pub fn marginalize(&self, keep: &[bool; X]) -> Self {
         // perm[k] = original index of the k-th unknown in the order (dropped…, kept…)
         let mut perm = [0usize; X];
-        let mut k = 0;
+        let mut k = 0usize;
         for want in [false, true] {
             for (i, flag) in keep.iter().enumerate() {
                 if *flag == want {
                     if let Some(slot) = perm.get_mut(k) {
                         *slot = i;
                     }
-                    k += 1;
+                    k = k.saturating_add(1); // (at most 2X: never saturates)
                 }
             }
         }
-        let dropped = keep.iter().filter(|f| !**f).count();
+        let dropped = crate::count(keep.iter().filter(|f| !**f));
         let mut permuted = Self::new();
         for i in 0..X {
             let row = SVector::<T, X>::from_fn(|j, _| {

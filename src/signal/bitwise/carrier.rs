@@ -122,7 +122,7 @@ impl Crossings {
         Self {
             d,
             h: h.min(64),
-            rem: unit - h * d,
+            rem: unit % d, // (= unit − h·d)
         }
     }
 
@@ -171,7 +171,8 @@ fn index_up<const B: u32, const T: usize>(psi: u32, c: &Crossings) -> [u32; 3] {
         }
         let bump = u32::from(e < c.rem);
         e = e.wrapping_sub(c.rem).wrapping_add(bump.wrapping_mul(c.d));
-        k = k + c.h + bump;
+        // (k ≥ 32 masks nothing: saturating keeps that, and the sum's bound visible)
+        k = k.saturating_add(c.h).saturating_add(bump);
     }
     planes
 }

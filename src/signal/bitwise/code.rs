@@ -154,7 +154,8 @@ impl CodeCursor {
     #[inline(always)]
     pub(crate) fn advance(&mut self, chips: u32, frac: u32) {
         let (f, carry) = self.frac.overflowing_add(frac);
-        let c = self.chip + chips + u32::from(carry);
+        // (chip < 1023 plus a word's few chips: far from wrapping)
+        let c = self.chip.wrapping_add(chips).wrapping_add(u32::from(carry));
         self.frac = f;
         self.chip = if c >= CA_CODE_LENGTH as u32 {
             c - CA_CODE_LENGTH as u32

@@ -362,7 +362,7 @@ impl<const A: usize> BitCorrelator<A> {
             self.epoch_carrier_phase = self.carrier_total;
         }
         self.correlate_span(block, start, n);
-        *cursor = start + n;
+        *cursor = start.saturating_add(n); // (n ≤ len − start: never saturates)
         if (n as u64) < to_wrap {
             return Ok(None);
         }
@@ -388,7 +388,8 @@ impl<const A: usize> BitCorrelator<A> {
         let l3 = self.levels == CarrierLevels::Three;
         let [nc, ns] = self.support;
         let mut out = [Taps::default(); A];
-        for (a, (t, acc)) in out.iter_mut().zip(self.acc.iter()).enumerate() {
+        // (indices from `0..A`, not `enumerate`: its counter keeps an overflow check)
+        for (a, (t, acc)) in (0..A).zip(out.iter_mut().zip(self.acc.iter())) {
             let tap = |k: usize| {
                 let p = acc.get(k).copied().unwrap_or_default();
                 let (i, q) = kernel::combine(cx, tb, l3, &p, nc, ns);
@@ -406,22 +407,24 @@ impl<const A: usize> BitCorrelator<A> {
 
     /// Correlates `n` samples from `start` (all within one code period), chunk by chunk.
     fn correlate_span(&mut self, block: &BitBlock<'_, A>, start: usize, n: usize) {
-        let end = start + n;
+        let end = start.saturating_add(n);
         let mut s = start;
         // Bounded: every pass but the last covers a whole chunk (at most 70 passes for the
         // largest epoch of 65 536 samples).
         while s < end {
             let w0 = s / WORD_SAMPLES;
-            let w1 = ((end - 1) / WORD_SAMPLES + 1).min(w0 + CHUNK_WORDS);
-            let stop = end.min(w1 * WORD_SAMPLES);
+            // (s < end: w1 > w0 and stop > s; saturating forms make the bounds visible)
+            let w1 = (end.saturating_sub(1) / WORD_SAMPLES + 1).min(w0 + CHUNK_WORDS);
+            let stop = end.min(w1.saturating_mul(WORD_SAMPLES));
             self.chunk(block, w0, w1, s, stop);
-            let m = (stop - s) as u64;
-            self.code.phase += m * self.code.step;
+            let m = stop.saturating_sub(s) as u64;
+            // (the code phase is modular: wrapped at every code period, far from 2⁶⁴)
+            self.code.phase = self.code.phase.wrapping_add(m.wrapping_mul(self.code.step));
             self.carrier.phase = self
                 .carrier
                 .phase
                 .wrapping_add(self.carrier.step.wrapping_mul(m as u32));
-            let advance = i64::from(self.carrier.step as i32) * m as i64;
+            let advance = i64::from(self.carrier.step as i32).wrapping_mul(m as i64);
             self.carrier_total = self.carrier_total.wrapping_add(advance);
             self.samples = self.samples.saturating_add(m as u32);
             s = stop;
@@ -430,30 +433,32 @@ impl<const A: usize> BitCorrelator<A> {
 
     /// One chunk: the words `w0..w1` of the block, samples `s..stop` of them.
     fn chunk(&mut self, block: &BitBlock<'_, A>, w0: usize, w1: usize, s: usize, stop: usize) {
-        let nw = (w1 - w0).min(CHUNK_WORDS);
-        let lead = s - w0 * WORD_SAMPLES;
-        let tail = w1 * WORD_SAMPLES - stop;
+        // (w0 = s / WORD_SAMPLES < w1, stop ≤ w1·WORD_SAMPLES: the saturations never act)
+        let nw = w1.saturating_sub(w0).min(CHUNK_WORDS);
+        let lead = s.saturating_sub(w0.saturating_mul(WORD_SAMPLES));
+        let tail = w1.saturating_mul(WORD_SAMPLES).saturating_sub(stop);
         let l3 = self.levels == CarrierLevels::Three;
         self.carrier_words(nw, lead, tail);
         self.code_words(block.table(), nw, lead, tail);
         if l3 {
             for c in self.work.carrier.iter().take(nw) {
-                self.support[0] += kernel::popcount(c.nzc);
-                self.support[1] += kernel::popcount(c.nzs);
+                // (support counts of one epoch, at most 2¹⁶: the saturation never acts)
+                self.support[0] = self.support[0].saturating_add(kernel::popcount(c.nzc));
+                self.support[1] = self.support[1].saturating_add(kernel::popcount(c.nzs));
             }
         } else {
-            let m = (stop - s) as u32;
-            self.support[0] += m;
-            self.support[1] += m;
+            let m = stop.saturating_sub(s) as u32;
+            self.support[0] = self.support[0].saturating_add(m);
+            self.support[1] = self.support[1].saturating_add(m);
         }
         let (cx, tb) = (self.format.complex, self.format.two_bit());
         let edges = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
         let work = &mut self.work;
-        for (a, acc) in self.acc.iter_mut().enumerate() {
+        for (a, acc) in (0..A).zip(self.acc.iter_mut()) {
             let Some(planes) = block.planes(a) else {
                 continue;
             };
-            let Some(p) = chunk_planes(planes, w0, w0 + nw, self.format) else {
+            let Some(p) = chunk_planes(planes, w0, w0.saturating_add(nw), self.format) else {
                 continue;
             };
             let all = a == 0 || self.slave_taps == SlaveTaps::All;
@@ -501,13 +506,19 @@ impl<const A: usize> BitCorrelator<A> {
         let d = self.offset;
         let back = self.noise_delay.max(d).div_ceil(WORD_SAMPLES);
         let forward = d.div_ceil(WORD_SAMPLES);
-        let words = nw + back + forward + 1;
+        let words = nw
+            .saturating_add(back)
+            .saturating_add(forward)
+            .saturating_add(1);
         let step = self.code.step;
         // Code phase at the first sample of the first prompt word.
-        let behind = ((lead + back * WORD_SAMPLES) as u64 * step) % CODE_WRAP;
+        // (lead < 32, back a few words, the step below 2³³: no product wraps)
+        let behind = ((lead.saturating_add(back.saturating_mul(WORD_SAMPLES))) as u64)
+            .wrapping_mul(step)
+            % CODE_WRAP;
         let first = (self.code.phase % CODE_WRAP + CODE_WRAP - behind) % CODE_WRAP;
         let mut at = CodeCursor::from_phase(first);
-        let word_step = WORD_SAMPLES as u64 * step;
+        let word_step = (WORD_SAMPLES as u64).wrapping_mul(step);
         let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
         let step4 = (step >> 2) as u32;
         let work = &mut self.work;
@@ -519,8 +530,14 @@ impl<const A: usize> BitCorrelator<A> {
         for (p, &c) in work.prompt.iter_mut().zip(work.cursors.iter()).take(words) {
             *p = code::prompt_word(&self.ext, table, c, step4);
         }
-        let base = back * WORD_SAMPLES;
-        let offsets = [base + d, base, base - d, base - self.noise_delay];
+        // (base ≥ d and ≥ the noise delay, both a few words: the saturations never act)
+        let base = back.saturating_mul(WORD_SAMPLES);
+        let offsets = [
+            base.saturating_add(d),
+            base,
+            base.saturating_sub(d),
+            base.saturating_sub(self.noise_delay),
+        ];
         for (taps, offset) in work.taps.iter_mut().zip(offsets) {
             window_words(taps.get_mut(..nw).unwrap_or_default(), &work.prompt, offset);
         }
@@ -666,8 +683,9 @@ fn antenna<const CX: bool, const TB: bool, const L3: bool>(
             code.get(..n).unwrap_or_default()
         };
         let x = |j: usize| scratch.get(j).and_then(|s| s.get(..n)).unwrap_or_default();
-        for (j, sum) in sums.iter_mut().enumerate().take(j_count) {
-            *sum += kernel::xor_count(x(j), code(j));
+        for (j, sum) in (0..j_count).zip(sums.iter_mut()) {
+            // (at most the epoch's samples, 2¹⁶: never wraps; as the integer correlator's)
+            *sum = sum.wrapping_add(kernel::xor_count(x(j), code(j)));
         }
     }
 }

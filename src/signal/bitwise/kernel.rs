@@ -139,7 +139,7 @@ pub(crate) fn prepare<const CX: bool, const TB: bool, const L3: bool>(
         let ((((r, &a), &ma), &b), &mb) = inputs;
         let u = streams::<CX, TB, L3>(a, ma, b, mb, r);
         let slots = [w0, w1, w2, w3, w4, w5, w6, w7];
-        for (j, (slot, x)) in slots.into_iter().zip(u).enumerate() {
+        for (j, (slot, x)) in (0..MAX_STREAMS).zip(slots.into_iter().zip(u)) {
             if j < j_count {
                 let mask = if !L3 {
                     u32::MAX
@@ -157,20 +157,22 @@ pub(crate) fn prepare<const CX: bool, const TB: bool, const L3: bool>(
 /// 4-bit population counts of `v` (each nibble 0–4).
 #[inline(always)]
 pub(crate) fn nibble_counts(v: u32) -> u32 {
-    let pairs = v - ((v >> 1) & 0x5555_5555);
-    (pairs & 0x3333_3333) + ((pairs >> 2) & 0x3333_3333)
+    // (SWAR: every field's sum stays within its field, so the word never wraps; the
+    // wrapping forms tell the compiler, which cannot see the fields)
+    let pairs = v.wrapping_sub((v >> 1) & 0x5555_5555);
+    (pairs & 0x3333_3333).wrapping_add((pairs >> 2) & 0x3333_3333)
 }
 
 /// 8-bit sums of the nibble counts `n`.
 #[inline(always)]
 fn byte_counts(n: u32) -> u32 {
-    (n & 0x0f0f_0f0f) + ((n >> 4) & 0x0f0f_0f0f)
+    (n & 0x0f0f_0f0f).wrapping_add((n >> 4) & 0x0f0f_0f0f)
 }
 
 /// The sum of the four 8-bit counts of `b`.
 #[inline(always)]
 fn byte_total(b: u32) -> u32 {
-    let halves = (b & 0x00ff_00ff) + ((b >> 8) & 0x00ff_00ff);
+    let halves = (b & 0x00ff_00ff).wrapping_add((b >> 8) & 0x00ff_00ff);
     halves.wrapping_mul(0x0001_0001) >> 16
 }
 
@@ -215,15 +217,18 @@ pub(crate) fn xor_count_swar(x: &[u32], t: &[u32]) -> u32 {
     let mut ts = t.chunks_exact(3);
     for (a, b) in (&mut xs).zip(&mut ts) {
         if let (&[a0, a1, a2], &[b0, b1, b2]) = (a, b) {
-            let nib = nibble_counts(a0 ^ b0) + nibble_counts(a1 ^ b1) + nibble_counts(a2 ^ b2);
-            bytes += byte_counts(nib);
+            // (field sums within their fields, as documented above: no word wraps)
+            let nib = nibble_counts(a0 ^ b0)
+                .wrapping_add(nibble_counts(a1 ^ b1))
+                .wrapping_add(nibble_counts(a2 ^ b2));
+            bytes = bytes.wrapping_add(byte_counts(nib));
         }
     }
-    let mut nib = 0;
+    let mut nib = 0u32;
     for (&a, &b) in xs.remainder().iter().zip(ts.remainder()) {
-        nib += nibble_counts(a ^ b);
+        nib = nib.wrapping_add(nibble_counts(a ^ b));
     }
-    byte_total(bytes + byte_counts(nib))
+    byte_total(bytes.wrapping_add(byte_counts(nib)))
 }
 
 /// `(I, Q)` of one tap from its streams' population counts `p` and the support counts `nc`
@@ -238,15 +243,16 @@ pub(crate) fn combine(
     ns: u32,
 ) -> (i32, i32) {
     let j_count = stream_count(complex, two_bit, three);
-    let mut sums = [0i32; MAX_STREAMS];
-    for (j, s) in sums.iter_mut().enumerate().take(j_count) {
+    // (in i64, exact for any u32 counts; the counts are at most 2¹⁶, the largest epoch, so
+    // the results fit i32 and the final saturation never acts)
+    let mut sums = [0i64; MAX_STREAMS];
+    for (j, (s, &pj)) in (0..MAX_STREAMS).zip(sums.iter_mut().zip(p)).take(j_count) {
         let n = if stream_uses_s(complex, two_bit, three, j) {
             ns
         } else {
             nc
         };
-        // Both at most 2¹⁶ (the largest epoch): exact in i32.
-        *s = n as i32 - 2 * p[j] as i32;
+        *s = i64::from(n) - 2 * i64::from(pj);
     }
     // One product's sum: a 1-bit stream, or 2·sign − t for 2-bit samples.
     let product = |k: usize| {
@@ -256,14 +262,16 @@ pub(crate) fn combine(
             sums[k]
         }
     };
-    if complex && !three {
+    let narrow = |v: i64| v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+    let (i, q) = if complex && !three {
         let (x, y) = (product(0), product(1));
         (x + y, x - y)
     } else if complex {
         (product(0) + product(1), product(2) - product(3))
     } else {
         (product(0), -product(1))
-    }
+    };
+    (narrow(i), narrow(q))
 }
 
 #[cfg(test)]

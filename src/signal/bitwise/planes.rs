@@ -343,12 +343,13 @@ impl<const W: usize> PlaneBuffer<W> {
             let lo = w * WORD_SAMPLES;
             let hi = (lo + WORD_SAMPLES).min(n);
             let (mut si, mut mi, mut sq, mut mq) = (0u32, 0u32, 0u32, 0u32);
-            for (k, &x) in i.get(lo..hi).unwrap_or_default().iter().enumerate() {
+            // (bit positions from `0..32`, not `enumerate`: the shifts' bound visible)
+            for (k, &x) in (0..WORD_SAMPLES as u32).zip(i.get(lo..hi).unwrap_or_default()) {
                 si |= u32::from(x < 0) << k;
                 mi |= large(x) << k;
             }
             if self.format.complex {
-                for (k, &x) in q.get(lo..hi).unwrap_or_default().iter().enumerate() {
+                for (k, &x) in (0..WORD_SAMPLES as u32).zip(q.get(lo..hi).unwrap_or_default()) {
                     sq |= u32::from(x < 0) << k;
                     mq |= large(x) << k;
                 }
@@ -378,7 +379,7 @@ impl<const W: usize> PlaneBuffer<W> {
 
     /// The bits of word `w` that hold samples when `n` samples are packed.
     fn tail_mask(n: usize, w: usize) -> u32 {
-        let valid = n.saturating_sub(w * WORD_SAMPLES);
+        let valid = n.saturating_sub(w.saturating_mul(WORD_SAMPLES));
         if valid >= WORD_SAMPLES {
             u32::MAX
         } else {
@@ -398,14 +399,14 @@ impl<const W: usize> PlaneBuffer<W> {
         let words = n.div_ceil(WORD_SAMPLES).min(W);
         let full = (n / WORD_SAMPLES).min(words);
         let mut chunks = bytes.chunks_exact(B);
-        for (w, chunk) in (&mut chunks).take(full).enumerate() {
+        for (w, chunk) in (0..full).zip(&mut chunks) {
             if let Ok(b) = <&[u8; B]>::try_from(chunk) {
                 self.set_word(w, word(b));
             }
         }
         if full < words {
             let mut last = [0u8; B];
-            let from = bytes.get(full * B..).unwrap_or_default();
+            let from = bytes.get(full.saturating_mul(B)..).unwrap_or_default();
             for (d, &b) in last.iter_mut().zip(from) {
                 *d = b;
             }
@@ -471,7 +472,7 @@ impl<const W: usize> PlaneBuffer<W> {
     /// `MultiChannel2`: one byte per sample; channel `c`'s sign and magnitude bits (`2c + 1`,
     /// `2c`) of four bytes gathered by one multiply each.
     fn pack_mc2(&mut self, bytes: &[u8], channel: usize, n: usize) {
-        let shift = 2 * (channel as u32 & 3);
+        let channel = channel as u32;
         // Bit 8j (j = 0..3) times 2^(24 − 7j) lands on bit 24 + j; no two partial products
         // share a bit, so there are no carries.
         let gather = |x: u32| ((x & 0x0101_0101).wrapping_mul(0x0102_0408)) >> 24;
@@ -479,7 +480,8 @@ impl<const W: usize> PlaneBuffer<W> {
             let (mut s, mut m) = (0u32, 0u32);
             for (g, quad) in b.chunks_exact(4).enumerate() {
                 if let &[x0, x1, x2, x3] = quad {
-                    let x = u32::from_le_bytes([x0, x1, x2, x3]) >> shift;
+                    // (the shift's bound visible here: the closure is compiled on its own)
+                    let x = u32::from_le_bytes([x0, x1, x2, x3]) >> (2 * (channel & 3));
                     s |= gather(x >> 1) << (4 * g);
                     m |= gather(x) << (4 * g);
                 }

@@ -103,7 +103,7 @@ impl<const N: usize> Acquisition<N> {
         let distinct = known.iter().filter(|k| k.prn != candidate.prn);
         for (slot, k) in others.iter_mut().zip(distinct) {
             *slot = probe(k, true);
-            count += 1;
+            count = count.saturating_add(1);
         }
         let test = CrossCorrelationTest {
             epoch_aligned: false,

@@ -317,7 +317,7 @@ impl<const N: usize> Acquisition<N> {
         let k = config.noncoherent_ms;
         let effective_ms = floor.effective_ms(k);
         let noise_floor = floor.mean();
-        let cells = (N * config.doppler_bins()) as f64;
+        let cells = N as f64 * config.doppler_bins() as f64; // (exact below 2⁵³)
         let threshold = detection_threshold(
             effective_ms,
             cells,
@@ -379,7 +379,12 @@ fn input_mean(i: &[i8], q: Option<&[i8]>, n: usize) -> [f32; 2] {
     if n == 0 {
         return [0.0; 2];
     }
-    let sum = |s: &[i8]| s.iter().take(n).map(|&x| i64::from(x)).sum::<i64>() as f64;
+    // (at most isize::MAX samples of ±128: far inside i64, the saturation never acts)
+    let sum = |s: &[i8]| {
+        s.iter()
+            .take(n)
+            .fold(0i64, |a, &x| a.saturating_add(i64::from(x))) as f64
+    };
     let mi = sum(i) / n as f64;
     let mq = q.map_or(0.0, |q| sum(q) / n as f64);
     [mi as f32, mq as f32]

@@ -102,17 +102,19 @@ impl Floor {
         let n = power.len();
         let background = |l: usize| {
             let d = l.abs_diff(peak_at);
-            d.min(n - d) > guard
+            circular(d, n) > guard
         };
         let (mut sum, mut count) = (0.0f32, 0u32);
         for (l, &p) in power.iter().enumerate() {
             if background(l) {
                 sum += p;
-                count += 1;
+                // (at most one per cell of the bin: never saturates)
+                count = count.saturating_add(1);
             }
         }
+        // (a statistics count over bins: saturates rather than wraps)
         if count == 0 || !(sum > 0.0) {
-            self.count += u64::from(count);
+            self.count = self.count.saturating_add(u64::from(count));
             return;
         }
         let scale = count as f32 / sum;
@@ -126,7 +128,7 @@ impl Floor {
         let unscale = f64::from(sum) / f64::from(count);
         self.sum += f64::from(sum);
         self.sum_sq += f64::from(sum_sq) * unscale * unscale;
-        self.count += u64::from(count);
+        self.count = self.count.saturating_add(u64::from(count));
     }
 
     /// Mean background cell (0 without cells).
@@ -184,6 +186,12 @@ impl Dwell {
     }
 }
 
+/// The circular distance of two lags `d` apart among `n` (`d` itself when `d > n`: not a lag
+/// difference, so not wrapped).
+fn circular(d: usize, n: usize) -> usize {
+    n.checked_sub(d).map_or(d, |r| d.min(r))
+}
+
 /// A code window for the peak search: centre lag and half-width, bins.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct CodeWindow {
@@ -194,7 +202,7 @@ pub(super) struct CodeWindow {
 impl CodeWindow {
     fn contains(&self, lag: usize, n: usize) -> bool {
         let d = lag.abs_diff(self.centre);
-        d.min(n - d) <= self.half
+        circular(d, n) <= self.half
     }
 }
 
@@ -247,9 +255,10 @@ impl<const N: usize> Acquisition<N> {
                     power: top,
                     bin: b,
                     lag: at,
+                    // (circular lags, N a power of two: wrapping is the modulo)
                     neighbours: [
-                        self.power[(at + N - 1) & (N - 1)],
-                        self.power[(at + 1) & (N - 1)],
+                        self.power[at.wrapping_sub(1) & (N - 1)],
+                        self.power[at.wrapping_add(1) & (N - 1)],
                     ],
                 };
             }
@@ -312,7 +321,7 @@ impl<const N: usize> Acquisition<N> {
     ) {
         self.power = [0.0; N];
         for m in 0..usize::from(config.noncoherent_ms) {
-            self.decimate(i, q, first_ms + m, doppler, config, dc);
+            self.decimate(i, q, first_ms.saturating_add(m), doppler, config, dc);
             self.fft.transform(&mut self.data, false);
             self.excise();
             for (d, c) in self.data.iter_mut().zip(self.code.iter()) {
@@ -324,7 +333,8 @@ impl<const N: usize> Acquisition<N> {
             let drift = libm::round(m as f64 * N as f64 * f64::from(doppler) / GPS_L1_HZ) as i64;
             let shift = drift.rem_euclid(N as i64) as usize;
             for (l, p) in self.power.iter_mut().enumerate() {
-                let d = self.data[(l + N - shift) & (N - 1)];
+                // (circular lags, N a power of two: wrapping is the modulo)
+                let d = self.data[l.wrapping_sub(shift) & (N - 1)];
                 *p += d[0] * d[0] + d[1] * d[1];
             }
         }
@@ -375,7 +385,8 @@ impl<const N: usize> Acquisition<N> {
                 let p = d[0] * d[0] + d[1] * d[1];
                 if p <= EXCISION_FACTOR * level {
                     sum += p;
-                    count += 1;
+                    // (at most one per line: never saturates)
+                    count = count.saturating_add(1);
                 }
             }
             level = if count > 0 { sum / count as f32 } else { 0.0 };
@@ -412,7 +423,8 @@ impl<const N: usize> Acquisition<N> {
             let half = libm::ceilf(libm::sqrtf(p / level) / core::f32::consts::PI) as usize;
             let half = half.min(N / 8);
             for j in 0..=2 * half {
-                let at = (k + N + j - half) & (N - 1);
+                // (circular lines, N a power of two: wrapping is the modulo)
+                let at = k.wrapping_add(j).wrapping_sub(half) & (N - 1);
                 if let Some(d) = self.data.get_mut(at) {
                     *d = [0.0; 2];
                 }
@@ -434,7 +446,7 @@ impl<const N: usize> Acquisition<N> {
         self.data = [[0.0; 2]; N];
         let fs = config.sample_rate_hz;
         let start = config.ms_start(m);
-        let end = config.ms_start(m + 1).min(i.len());
+        let end = config.ms_start(m.saturating_add(1)).min(i.len());
         let step = CarrierNco::step_for(config.intermediate_frequency_hz + f64::from(doppler), fs);
         // Bin of sample k: floor((k/f_s − m·1 ms) · N · 1000), in 32.32 fixed point.
         let bin_step = libm::round(N as f64 * 1000.0 / fs * 4_294_967_296.0) as u64;
@@ -467,7 +479,8 @@ impl<const N: usize> Acquisition<N> {
             d[0] += x * c + y * s;
             d[1] += y * c - x * s;
             phase = phase.wrapping_add(step);
-            bin_acc += bin_step;
+            // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
+            bin_acc = bin_acc.wrapping_add(bin_step);
         }
     }
 
@@ -495,7 +508,11 @@ impl<const N: usize> Acquisition<N> {
         let (fm, f0, fp) = (
             if bd > 0 { amp(bd - 1) } else { 0.0 },
             amp(bd),
-            if bd + 1 < grid.bins { amp(bd + 1) } else { 0.0 },
+            if bd < grid.bins.saturating_sub(1) {
+                amp(bd + 1)
+            } else {
+                0.0
+            },
         );
         let curv = 2.0 * f0 - fm - fp;
         let df = if curv > 0.0 {

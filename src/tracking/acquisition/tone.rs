@@ -54,7 +54,10 @@ impl Tone {
     ) -> Complex {
         let gain = if q.is_some() { 1.0 } else { 2.0 };
         let dq = if q.is_some() { dc[1] } else { 0.0 };
-        let (start, end) = (config.ms_start(m), config.ms_start(m + 1).min(i.len()));
+        let (start, end) = (
+            config.ms_start(m),
+            config.ms_start(m.saturating_add(1)).min(i.len()),
+        );
         let mut phase = self.step.wrapping_mul(start as u32);
         let (mut sr, mut si) = (0.0f32, 0.0f32);
         for k in start..end {
@@ -104,7 +107,7 @@ impl<const N: usize> Acquisition<N> {
         // Rolling powers of lines k − 1, k, k + 1 (each computed once).
         let (mut before, mut p) = (power(&self.data[N - 1]), power(&self.data[0]));
         for k in 0..N {
-            let after = power(&self.data[(k + 1) & (N - 1)]);
+            let after = power(&self.data[k.wrapping_add(1) & (N - 1)]);
             if p > TONE_FACTOR * level && p >= before && p > after {
                 // Parabola through the amplitudes; bin k is k kHz (wrapped to ±N/2).
                 let (a0, am, ap) = (libm::sqrtf(p), libm::sqrtf(before), libm::sqrtf(after));
@@ -131,7 +134,7 @@ impl<const N: usize> Acquisition<N> {
         for &(_, f) in lines.iter().filter(|l| l.0 > 0.0) {
             if let Some(slot) = self.tones.get_mut(count) {
                 *slot = refine_tone(f, i, q, ms, config, dc);
-                count += 1;
+                count = count.saturating_add(1); // (at most the tones' capacity)
             }
         }
         self.tone_count = count;
