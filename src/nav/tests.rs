@@ -600,6 +600,7 @@ fn the_leo_filter_coasts_through_a_60_s_outage() {
     let (p, v) = truth.ecef(300.0);
     let before = (Vector3::from(f.state().position_m) - p).norm();
     let before_v = (Vector3::from(f.state().velocity_m_s) - v).norm();
+    assert!(before < 10.0 && before_v < 0.1, "{before} m, {before_v} m/s");
     // outage: predictions only, every second (aiding continues)
     let mut worst = 0.0f64;
     for k in 301..=360 {
@@ -612,7 +613,7 @@ fn the_leo_filter_coasts_through_a_60_s_outage() {
     let (p, v) = truth.ecef(360.0);
     let after = (Vector3::from(state.position_m) - p).norm();
     let after_v = (Vector3::from(state.velocity_m_s) - v).norm();
-    assert!(after < 10.0, "{after}");
+    assert!(after < 10.0 && after_v < 0.5, "{after} m, {after_v} m/s");
     assert!(after < 3.0 * f64::from(state.position_sigma_m) + 1.0);
     // the fixes come back and are accepted
     let (p, v) = truth.ecef(361.0);
