@@ -55,7 +55,7 @@
 //! a stronger code cross-correlates and the test above explains it away.
 //! [`Acquisition::search_report_cancelling`] searches again with the known signals
 //! subtracted from the samples (their code phase and Doppler refined, their phasor measured
-//! every millisecond: [`cancel`]), and [`Acquisition::cancellation_check`] tells a satellite
+//! every millisecond), and [`Acquisition::cancellation_check`] tells a satellite
 //! (it keeps its power with them cancelled) from their cross-correlation (it loses it).
 //!
 //! # Refinement
@@ -324,7 +324,7 @@ impl<const N: usize> Acquisition<N> {
     /// [`Acquisition::search_report`] on the samples with the `known` signals (detected or
     /// tracked on these samples; entries of `prn` skipped, at most [`MAX_CANCELLED`], the
     /// first ones) cancelled from every millisecond of the search and of its dwell (see
-    /// [`cancel`]'s method): the second look at a PRN that stronger satellites masked,
+    /// the module documentation): the second look at a PRN that stronger satellites masked,
     /// their cross-correlation gone from the background and from its cells.
     ///
     /// Bounded: as [`Acquisition::search`], each millisecond with one more pass over its
