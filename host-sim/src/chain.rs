@@ -344,6 +344,9 @@ pub struct Detections {
 pub struct SecondLook {
     /// The search with the known signals cancelled.
     pub report: SearchReport,
+    /// The threshold of the PRN's first search: the second look's metric must pass it too
+    /// (the cancellation lowers the background's spread, not a tone's or a jammer's tail).
+    pub first_threshold: f32,
     /// Its detection's power with and without them (`None`: nothing detected).
     pub check: Option<CancellationCheck>,
 }
@@ -351,16 +354,20 @@ pub struct SecondLook {
 impl SecondLook {
     /// Detected with the known signals cancelled, and a satellite of its own.
     pub fn accepted(&self) -> bool {
-        self.report.result.detected && self.check.is_some_and(|c| c.kept)
+        self.report.result.detected
+            && self.report.result.metric > self.first_threshold
+            && self.check.is_some_and(|c| c.kept)
     }
 }
 
 /// The second look at the PRNs stronger satellites may have masked: those of `reports` not
 /// `accepted` whose background was not thermal (fewer effective milliseconds than summed:
-/// cross-correlation in it) or whose detection was `rejected` as a cross-correlation, each
+/// cross-correlation in it; not when interference was found, which makes a background of its
+/// own) or whose detection was `rejected` as a cross-correlation, each
 /// searched again with the `known` signals cancelled from the samples
-/// ([`Acquisition::search_report_cancelling`]); a detection there is a satellite when it
-/// keeps its power with them cancelled ([`Acquisition::cancellation_check`]). In parallel,
+/// ([`Acquisition::search_report_cancelling`]); a detection there is a satellite when its
+/// metric passes the first search's threshold too and it keeps its power with them
+/// cancelled ([`Acquisition::cancellation_check`]). In parallel,
 /// one engine per worker; nothing to do without known signals.
 ///
 /// # Errors
@@ -382,19 +389,20 @@ pub fn second_look(
     let masked = |r: &&SearchReport| {
         let prn = r.result.prn;
         !accepted.iter().any(|a| a.prn == prn)
+            && !r.interference
             && (r.effective_ms < config.noncoherent_ms
                 || rejected.iter().any(|x| x.result.prn == prn))
     };
-    let again: Vec<Prn> = reports
+    let again: Vec<(Prn, f32)> = reports
         .iter()
         .filter(masked)
-        .map(|r| r.result.prn)
+        .map(|r| (r.result.prn, r.result.threshold))
         .collect();
     again
         .par_iter()
         .map_init(
             || Acquisition::<2048>::new().map(Box::new),
-            |engine, &prn| -> Result<SecondLook> {
+            |engine, &(prn, first_threshold)| -> Result<SecondLook> {
                 let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
                 let report =
                     engine.search_report_cancelling(prn, i, q, first_sample, config, known)?;
@@ -410,7 +418,11 @@ pub fn second_look(
                 } else {
                     None
                 };
-                Ok(SecondLook { report, check })
+                Ok(SecondLook {
+                    report,
+                    first_threshold,
+                    check,
+                })
             },
         )
         .collect()

@@ -230,9 +230,10 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
             result.detected = !check.explained;
             masked |= check.explained;
         }
-        if !result.detected && masked && !known.is_empty() {
+        // (Not when interference was found: it makes a background of its own.)
+        if !result.detected && masked && !report.interference && !known.is_empty() {
             result = self
-                .second_look(prn, i, q, first_sample, &known)?
+                .second_look(prn, i, q, first_sample, &known, report.result.threshold)?
                 .unwrap_or(result);
         }
         if result.detected {
@@ -242,8 +243,10 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     }
 
     /// The search of `prn` again with the channels' signals `known` cancelled from the
-    /// samples: its result when it detects a satellite that keeps its power with them
-    /// cancelled ([`Acquisition::cancellation_check`]), `None` otherwise.
+    /// samples: its result when it detects a satellite whose metric passes the first
+    /// search's `first_threshold` too (the cancellation lowers the background's spread, not a
+    /// tone's tail) and that keeps its power with them cancelled
+    /// ([`Acquisition::cancellation_check`]), `None` otherwise.
     fn second_look(
         &mut self,
         prn: Prn,
@@ -251,12 +254,13 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         q: Option<&[i8]>,
         first_sample: u64,
         known: &[KnownSignal],
+        first_threshold: f32,
     ) -> Result<Option<SearchResult>, ReceiverError> {
         let config = self.config.acquisition;
         let again =
             self.acquisition
                 .search_report_cancelling(prn, i, q, first_sample, &config, known)?;
-        if !again.result.detected {
+        if !again.result.detected || !(again.result.metric > first_threshold) {
             return Ok(None);
         }
         let check = self.acquisition.cancellation_check(

@@ -110,7 +110,9 @@ pub struct SecondLookReport {
     /// The detection's power with them cancelled over its power without, dB (`null`: not
     /// detected).
     pub power_kept_db: Option<f64>,
-    /// Reported as a satellite (verified, and it keeps its power).
+    /// The threshold of the PRN's first search (the metric must pass it too).
+    pub first_threshold: f64,
+    /// Reported as a satellite (verified, over the first threshold, and it keeps its power).
     pub accepted: bool,
 }
 
@@ -369,6 +371,7 @@ fn second_look(l: &SecondLook) -> SecondLookReport {
         power_kept_db: l
             .check
             .map(|c| 10.0 * (f64::from(c.cancelled_power) / f64::from(c.power)).log10()),
+        first_threshold: f64::from(l.first_threshold),
         accepted: l.accepted(),
     }
 }

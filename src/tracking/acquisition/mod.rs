@@ -236,6 +236,9 @@ pub struct SearchReport {
     pub verification_metric: f32,
     /// The dwell's threshold (0 when not run).
     pub verification_threshold: f32,
+    /// Interference was found in these samples (continuous-wave tones cancelled): a
+    /// background that is not thermal may owe it to that rather than to other satellites.
+    pub interference: bool,
 }
 
 /// The acquisition engine with its fixed workspace (`N` bins per millisecond).
@@ -388,6 +391,7 @@ impl<const N: usize> Acquisition<N> {
             verification: dwell.verification,
             verification_metric: dwell.metric,
             verification_threshold: dwell.threshold,
+            interference: self.tone_count > 0,
         })
     }
 }
