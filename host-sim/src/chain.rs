@@ -8,10 +8,10 @@
 
 use anyhow::{Context, Result};
 use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
-use gnss_attitude::tracking::acquisition::CROSS_CORRELATION_MARGIN;
+use gnss_attitude::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use gnss_attitude::tracking::{
-    Acquisition, AcquisitionConfig, Channel, ChannelConfig, CrossCheck, KnownSignal, SearchReport,
-    SearchResult, TrackingEpoch,
+    Acquisition, AcquisitionConfig, CancellationCheck, Channel, ChannelConfig, CrossCheck,
+    KnownSignal, SearchReport, SearchResult, TrackingEpoch,
 };
 use rayon::prelude::*;
 
@@ -335,12 +335,105 @@ pub struct Detections {
     pub accepted: Vec<SearchResult>,
     /// Detected and verified, but the cross-correlation of stronger satellites.
     pub rejected: Vec<CrossCorrelationRejection>,
+    /// The second looks ([`second_look`]), in the order of the PRNs searched.
+    pub second_looks: Vec<SecondLook>,
+}
+
+/// A PRN searched again with the known signals cancelled ([`second_look`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SecondLook {
+    /// The search with the known signals cancelled.
+    pub report: SearchReport,
+    /// The threshold of the PRN's first search: the second look's metric must pass it too
+    /// (the cancellation lowers the background's spread, not a tone's or a jammer's tail).
+    pub first_threshold: f32,
+    /// Its detection's power with and without them (`None`: nothing detected).
+    pub check: Option<CancellationCheck>,
+}
+
+impl SecondLook {
+    /// Detected with the known signals cancelled, and a satellite of its own.
+    pub fn accepted(&self) -> bool {
+        self.report.result.detected
+            && self.report.result.metric > self.first_threshold
+            && self.check.is_some_and(|c| c.kept)
+    }
+}
+
+/// The second look at the PRNs stronger satellites may have masked: those of `reports` not
+/// `accepted` whose background was not thermal (fewer effective milliseconds than summed:
+/// cross-correlation in it; not when interference was found, which makes a background of its
+/// own) or whose detection was `rejected` as a cross-correlation, each
+/// searched again with the `known` signals cancelled from the samples
+/// ([`Acquisition::search_report_cancelling`]); a detection there is a satellite when its
+/// metric passes the first search's threshold too and it keeps its power with them
+/// cancelled ([`Acquisition::cancellation_check`]). In parallel,
+/// one engine per worker; nothing to do without known signals.
+///
+/// # Errors
+/// The core's refusal of the configuration or the samples.
+#[allow(clippy::too_many_arguments)]
+pub fn second_look(
+    i: &[i8],
+    q: Option<&[i8]>,
+    first_sample: u64,
+    config: &AcquisitionConfig,
+    reports: &[SearchReport],
+    accepted: &[SearchResult],
+    rejected: &[CrossCorrelationRejection],
+    known: &[KnownSignal],
+) -> Result<Vec<SecondLook>> {
+    if known.is_empty() {
+        return Ok(Vec::new());
+    }
+    let masked = |r: &&SearchReport| {
+        let prn = r.result.prn;
+        !accepted.iter().any(|a| a.prn == prn)
+            && !r.interference
+            && (r.effective_ms < config.noncoherent_ms
+                || rejected.iter().any(|x| x.result.prn == prn))
+    };
+    let again: Vec<(Prn, f32)> = reports
+        .iter()
+        .filter(masked)
+        .map(|r| (r.result.prn, r.result.threshold))
+        .collect();
+    again
+        .par_iter()
+        .map_init(
+            || Acquisition::<2048>::new().map(Box::new),
+            |engine, &(prn, first_threshold)| -> Result<SecondLook> {
+                let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
+                let report =
+                    engine.search_report_cancelling(prn, i, q, first_sample, config, known)?;
+                let check = if report.result.detected {
+                    Some(engine.cancellation_check(
+                        &report.result,
+                        known,
+                        i,
+                        q,
+                        config,
+                        CANCELLATION_KEEP_FRACTION,
+                    )?)
+                } else {
+                    None
+                };
+                Ok(SecondLook {
+                    report,
+                    first_threshold,
+                    check,
+                })
+            },
+        )
+        .collect()
 }
 
 /// Searches `prns` ([`search_reports`]), then tests the verified detections, strongest first,
 /// against the cross-correlation of the stronger accepted ones and of `tracked` (signals
 /// known on these samples, e.g. the channels') with the core's
-/// [`Acquisition::cross_check`]; `margin` is its margin (`None`: no test).
+/// [`Acquisition::cross_check`]; `margin` is its margin (`None`: no test, and no second
+/// look). Then the [`second_look`] at the PRNs the stronger satellites may have masked, with
+/// the tracked and accepted signals (strongest first) cancelled.
 ///
 /// # Errors
 /// As [`search_prns`].
@@ -380,11 +473,36 @@ pub fn detect_prns(
             accepted.push(r);
         }
     }
+    // The known signals, strongest first (the cancellation takes the first ones).
+    let known: Vec<KnownSignal> = tracked
+        .iter()
+        .copied()
+        .chain(accepted.iter().map(KnownSignal::from))
+        .collect();
+    let second_looks = match margin {
+        Some(_) => second_look(
+            i,
+            q,
+            first_sample,
+            config,
+            &reports,
+            &accepted,
+            &rejected,
+            &known,
+        )?,
+        None => Vec::new(),
+    };
+    for look in second_looks.iter().filter(|l| l.accepted()) {
+        let prn = look.report.result.prn;
+        rejected.retain(|x| x.result.prn != prn);
+        accepted.push(look.report.result);
+    }
     accepted.sort_by_key(|r| r.prn.number());
     Ok(Detections {
         reports,
         accepted,
         rejected,
+        second_looks,
     })
 }
 

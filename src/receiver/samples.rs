@@ -26,7 +26,7 @@ use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
 use crate::receiver::ReceiverError;
 use crate::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use crate::signal::{Prn, SampleBlock};
-use crate::tracking::acquisition::CROSS_CORRELATION_MARGIN;
+use crate::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal, SearchResult,
@@ -178,6 +178,10 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     /// dwell); a detection that the channels' satellites do not explain as their
     /// cross-correlation ([`Acquisition::cross_check`]; `detected` is then false) starts a
     /// channel that tracks from the first sample of the next [`Self::push_samples`] block.
+    /// When the channels' satellites masked the search (their cross-correlation in its
+    /// background, or its detection explained as one), the PRN is searched again with them
+    /// cancelled ([`Acquisition::search_report_cancelling`]), and that search's detection,
+    /// if it keeps its power with them cancelled, is the result.
     /// Searching a PRN that already has a channel only reports.
     ///
     /// # Errors
@@ -192,21 +196,29 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         first_sample: u64,
     ) -> Result<SearchResult, ReceiverError> {
         let config = self.config.acquisition;
-        let mut result = self.acquisition.search(prn, i, q, first_sample, &config)?;
-        if result.detected && !self.tracks(prn) {
+        let report = self
+            .acquisition
+            .search_report(prn, i, q, first_sample, &config)?;
+        let mut result = report.result;
+        if self.tracks(prn) {
+            return Ok(result);
+        }
+        let mut known: Vec<KnownSignal, S> = Vec::new();
+        for k in self
+            .channels
+            .iter()
+            .filter_map(|(c, _)| c.known_signal_at(first_sample))
+        {
+            // One entry per channel: at most S, the capacity.
+            if known.push(k).is_err() {
+                break;
+            }
+        }
+        // The channels' satellites' cross-correlation in the background masks a weaker one.
+        let mut masked = report.effective_ms < config.noncoherent_ms;
+        if result.detected {
             // Not a satellite when the channels' satellites explain it as their
             // cross-correlation.
-            let mut known: Vec<KnownSignal, S> = Vec::new();
-            for k in self
-                .channels
-                .iter()
-                .filter_map(|(c, _)| c.known_signal_at(first_sample))
-            {
-                // One entry per channel: at most S, the capacity.
-                if known.push(k).is_err() {
-                    break;
-                }
-            }
             let check = self.acquisition.cross_check(
                 &result,
                 &known,
@@ -216,11 +228,50 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
                 CROSS_CORRELATION_MARGIN,
             )?;
             result.detected = !check.explained;
+            masked |= check.explained;
         }
-        if result.detected && !self.tracks(prn) {
+        // (Not when interference was found: it makes a background of its own.)
+        if !result.detected && masked && !report.interference && !known.is_empty() {
+            result = self
+                .second_look(prn, i, q, first_sample, &known, report.result.threshold)?
+                .unwrap_or(result);
+        }
+        if result.detected {
             self.start(&result)?;
         }
         Ok(result)
+    }
+
+    /// The search of `prn` again with the channels' signals `known` cancelled from the
+    /// samples: its result when it detects a satellite whose metric passes the first
+    /// search's `first_threshold` too (the cancellation lowers the background's spread, not a
+    /// tone's tail) and that keeps its power with them cancelled
+    /// ([`Acquisition::cancellation_check`]), `None` otherwise.
+    fn second_look(
+        &mut self,
+        prn: Prn,
+        i: &[i8],
+        q: Option<&[i8]>,
+        first_sample: u64,
+        known: &[KnownSignal],
+        first_threshold: f32,
+    ) -> Result<Option<SearchResult>, ReceiverError> {
+        let config = self.config.acquisition;
+        let again =
+            self.acquisition
+                .search_report_cancelling(prn, i, q, first_sample, &config, known)?;
+        if !again.result.detected || !(again.result.metric > first_threshold) {
+            return Ok(None);
+        }
+        let check = self.acquisition.cancellation_check(
+            &again.result,
+            known,
+            i,
+            q,
+            &config,
+            CANCELLATION_KEEP_FRACTION,
+        )?;
+        Ok(check.kept.then_some(again.result))
     }
 
     /// Starts a channel from a detection made elsewhere (another engine, a hardware search).

@@ -23,7 +23,7 @@ mod refine;
 pub mod xcorr;
 
 pub use acquisition::{
-    Acquisition, AcquisitionConfig, AcquisitionError, CrossCheck, KnownSignal, SearchReport,
-    SearchResult, Verification,
+    Acquisition, AcquisitionConfig, AcquisitionError, CancellationCheck, CrossCheck, KnownSignal,
+    SearchReport, SearchResult, Verification,
 };
 pub use channel::{Channel, ChannelConfig, ChannelState, LockFlags, TrackingEpoch, TrackingError};

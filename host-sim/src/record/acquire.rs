@@ -9,7 +9,12 @@
 //! ([`gnss_attitude::tracking::Acquisition::cross_check`]): a detection whose power is within
 //! [`AcquireOptions::cross_correlation_margin_db`] of the cross-correlation the stronger
 //! satellites put at its code lag and Doppler offset is reported as
-//! `rejected_cross_correlations` instead of as a detection.
+//! `rejected_cross_correlations` instead of as a detection. Then the second look: each PRN
+//! not accepted whose search's background held the stronger satellites' cross-correlation
+//! (fewer effective milliseconds than summed) or whose detection was rejected is searched
+//! again with the accepted satellites cancelled from the samples
+//! ([`gnss_attitude::tracking::Acquisition::search_report_cancelling`]), and a detection
+//! there that keeps its power with them cancelled is a satellite (`second_looks`).
 
 use std::time::Instant;
 
@@ -19,7 +24,7 @@ use gnss_attitude::tracking::{AcquisitionConfig, KnownSignal, SearchResult, Veri
 use serde::Serialize;
 
 use super::reader::Recording;
-use crate::chain::{detect_prns, Detections};
+use crate::chain::{detect_prns, Detections, SecondLook};
 
 /// Acquisition settings of the file commands.
 #[derive(Clone, Debug)]
@@ -88,6 +93,29 @@ pub struct Rejected {
     pub over_predicted_db: f64,
 }
 
+/// A PRN searched again with the detected satellites cancelled from the samples (its first
+/// search's background held their cross-correlation, or its detection was rejected as one).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct SecondLookReport {
+    /// PRN.
+    pub prn: u8,
+    /// Peak over the background mean, with the known satellites cancelled.
+    pub metric: f64,
+    /// Threshold on that background.
+    pub threshold: f64,
+    /// Milliseconds that background behaves as independent.
+    pub effective_ms: u16,
+    /// Detected and verified with them cancelled.
+    pub verified: bool,
+    /// The detection's power with them cancelled over its power without, dB (`null`: not
+    /// detected).
+    pub power_kept_db: Option<f64>,
+    /// The threshold of the PRN's first search (the metric must pass it too).
+    pub first_threshold: f64,
+    /// Reported as a satellite (verified, over the first threshold, and it keeps its power).
+    pub accepted: bool,
+}
+
 /// One PRN's search as the core reports it.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct PrnSearch {
@@ -146,6 +174,8 @@ pub struct AcquireReport {
     pub search_s: f64,
     /// Every PRN's search, in the order searched.
     pub searches: Vec<PrnSearch>,
+    /// The PRNs searched again with the detected satellites cancelled.
+    pub second_looks: Vec<SecondLookReport>,
 }
 
 impl AcquireOptions {
@@ -289,6 +319,7 @@ pub fn acquire_with_searches(
         rejected_cross_correlations: rejections(&found),
         search_s,
         searches: found.reports.iter().map(prn_search).collect(),
+        second_looks: found.second_looks.iter().map(second_look).collect(),
     };
     let results = found.reports.iter().map(|r| r.result).collect();
     Ok((report, found.accepted, results))
@@ -327,6 +358,22 @@ fn rejections(found: &Detections) -> Vec<Rejected> {
                 * (f64::from(x.check.power) / f64::from(x.check.predicted_power)).log10(),
         })
         .collect()
+}
+
+fn second_look(l: &SecondLook) -> SecondLookReport {
+    let r = &l.report;
+    SecondLookReport {
+        prn: r.result.prn.number(),
+        metric: f64::from(r.result.metric),
+        threshold: f64::from(r.result.threshold),
+        effective_ms: r.effective_ms,
+        verified: r.result.detected,
+        power_kept_db: l
+            .check
+            .map(|c| 10.0 * (f64::from(c.cancelled_power) / f64::from(c.power)).log10()),
+        first_threshold: f64::from(l.first_threshold),
+        accepted: l.accepted(),
+    }
 }
 
 fn prn_search(r: &gnss_attitude::tracking::SearchReport) -> PrnSearch {
@@ -378,6 +425,15 @@ pub fn print_report(r: &AcquireReport) {
         println!(
             "  PRN {} at {:.0} Hz (metric {:.2}) rejected: cross-correlation of PRN {} ({:+.1} dB over the prediction)",
             x.prn, x.doppler_hz, x.metric, x.stronger_prn, x.over_predicted_db
+        );
+    }
+    for x in r.second_looks.iter().filter(|x| x.accepted) {
+        println!(
+            "  PRN {} found with the stronger satellites cancelled (metric {:.2} over {:.2}, {:+.1} dB of its power kept)",
+            x.prn,
+            x.metric,
+            x.threshold,
+            x.power_kept_db.unwrap_or(f64::NAN)
         );
     }
     for x in r.searches.iter().filter(|x| x.candidate && !x.verified) {

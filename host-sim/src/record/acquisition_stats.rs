@@ -22,8 +22,10 @@ use std::time::Instant;
 use anyhow::Result;
 use serde::Serialize;
 
-use super::acquire::{acquire, AcquireOptions};
-use super::synthesize::{open_synthesized, write_recording, Dynamics, Overlay, SynthSpec};
+use super::acquire::{acquire, AcquireOptions, AcquireReport};
+use super::synthesize::{
+    open_synthesized, write_recording, Dynamics, Overlay, RecordingTruth, SynthSpec,
+};
 use super::track::{track, TrackOptions};
 use super::FileFormat;
 
@@ -328,6 +330,7 @@ fn measure_case(case: &Case, dir: &Path) -> Result<CaseFigures> {
                 None => f.false_detections += 1,
             }
         }
+        report_misses(&case.name, spec.seed, &truth, &report);
     }
     if f.present > 0 {
         f.detection_probability = f.found as f64 / f.present as f64;
@@ -335,6 +338,38 @@ fn measure_case(case: &Case, dir: &Path) -> Result<CaseFigures> {
     f.false_alarm_rate = f.false_detections as f64 / f.absent_searches.max(1) as f64;
     f.wall_s = started.elapsed().as_secs_f64();
     Ok(f)
+}
+
+/// Prints (stderr) every present satellite not found and every absent PRN reported, with
+/// what the search and the cross-correlation test said about it.
+fn report_misses(case: &str, seed: u64, truth: &RecordingTruth, report: &AcquireReport) {
+    for s in &truth.satellites {
+        let found = report
+            .detections
+            .iter()
+            .any(|d| d.prn == s.prn && (d.doppler_hz - s.doppler_hz).abs() <= FOUND_DOPPLER_HZ);
+        if found {
+            continue;
+        }
+        let search = report.searches.iter().find(|x| x.prn == s.prn);
+        let detection = report.detections.iter().find(|d| d.prn == s.prn);
+        let rejected = report
+            .rejected_cross_correlations
+            .iter()
+            .find(|x| x.prn == s.prn);
+        eprintln!(
+            "acquisition-stats: {case}, seed {seed}: PRN {} ({:.1} dB-Hz, {:.0} Hz, {:.2} chips) missed: search {search:?}, detection {detection:?}, rejected {rejected:?}",
+            s.prn, s.cn0_dbhz, s.doppler_hz, s.code_phase_chips
+        );
+    }
+    for d in &report.detections {
+        if !truth.satellites.iter().any(|s| s.prn == d.prn) {
+            eprintln!(
+                "acquisition-stats: {case}, seed {seed}: absent PRN {} reported: {d:?}",
+                d.prn
+            );
+        }
+    }
 }
 
 /// `track` on a noise-free static recording of 11 satellites at 45 dB-Hz (the kind of file

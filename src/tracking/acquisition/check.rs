@@ -5,7 +5,8 @@
 #[cfg(doc)]
 use super::CROSS_CORRELATION_MARGIN;
 use super::{
-    check_inputs, input_mean, Acquisition, AcquisitionConfig, AcquisitionError, SearchResult,
+    check_inputs, check_known, input_mean, Acquisition, AcquisitionConfig, AcquisitionError,
+    SearchResult,
 };
 use crate::signal::ca_code::{Prn, CA_CODE_LENGTH};
 use crate::tracking::xcorr::{
@@ -49,7 +50,70 @@ pub struct CrossCheck {
     pub predicted_power: f32,
 }
 
+/// The outcome of [`Acquisition::cancellation_check`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CancellationCheck {
+    /// The candidate keeps at least the configured fraction of its power with the known
+    /// signals cancelled: a satellite of its own.
+    pub kept: bool,
+    /// Known signals cancelled.
+    pub cancelled: usize,
+    /// The candidate's power over the background, engine units.
+    pub power: f32,
+    /// The same with the known signals cancelled.
+    pub cancelled_power: f32,
+}
+
+/// A candidate is a satellite of its own when it keeps at least this fraction of its power
+/// (background removed) with the known signals cancelled from the samples (−3 dB; another
+/// satellite's cross-correlation keeps what the cancellation leaves of that satellite).
+pub const CANCELLATION_KEEP_FRACTION: f32 = 0.5;
+
 impl<const N: usize> Acquisition<N> {
+    /// Tests `candidate` (a result of a search on `i`, `q`) by cancelling the `known`
+    /// signals from the samples ([`Acquisition::search_report_cancelling`]'s cancellation):
+    /// its power at its Doppler and code phase over the search's `K` ms, background removed,
+    /// without and with the cancellation; it is `kept` when the second is at least
+    /// `keep_fraction` times the first ([`CANCELLATION_KEEP_FRACTION`] is the receiver's
+    /// choice). A peak that is the cross-correlation of known signals loses what the
+    /// cancellation removes of them; a satellite keeps its own power.
+    ///
+    /// Bounded: `2 · K` iterations of one millisecond of samples (the second with one pass
+    /// per known signal) and two `N`-point FFTs, and the known signals' refinement.
+    ///
+    /// # Errors
+    /// As [`Acquisition::search`], and [`AcquisitionError::NonFinite`] for a non-finite
+    /// candidate, known signal or fraction.
+    pub fn cancellation_check(
+        &mut self,
+        candidate: &SearchResult,
+        known: &[KnownSignal],
+        i: &[i8],
+        q: Option<&[i8]>,
+        config: &AcquisitionConfig,
+        keep_fraction: f32,
+    ) -> Result<CancellationCheck, AcquisitionError> {
+        check_inputs(i, q, config)?;
+        let victim = KnownSignal::from(candidate);
+        check_known(known)?;
+        check_known(core::slice::from_ref(&victim))?;
+        if !keep_fraction.is_finite() {
+            return Err(AcquisitionError::NonFinite);
+        }
+        let dc = input_mean(i, q, config.samples_needed());
+        self.prepare_interference(i, q, config, dc);
+        let power = self.signal_power(&victim, false, i, q, config, dc);
+        let cancelled = self.set_cancellation(candidate.prn, known, i, q, config, dc);
+        let cancelled_power = self.signal_power(&victim, false, i, q, config, dc);
+        Ok(CancellationCheck {
+            kept: cancelled_power >= keep_fraction * power,
+            cancelled,
+            power,
+            cancelled_power,
+        })
+    }
+
     /// Tests `candidate` (a result of a search on `i`, `q`) against the cross-correlation of
     /// the `known` signals that are stronger on these samples: each signal's power is
     /// measured on the search's `K` ms by the engine's own correlation at its Doppler (the

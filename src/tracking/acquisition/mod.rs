@@ -49,6 +49,15 @@
 //! power is explained by the stronger ones' cross-correlation at its code lag and Doppler
 //! offset ([`super::xcorr`]; the strong cases are Doppler differences near multiples of 1 kHz).
 //!
+//! # Second look, with the known satellites cancelled
+//! A satellite weaker than the others by 10–15 dB can be masked by their cross-correlation:
+//! its search's background rises and repeats (the threshold rises), or its peak sits where
+//! a stronger code cross-correlates and the test above explains it away.
+//! [`Acquisition::search_report_cancelling`] searches again with the known signals
+//! subtracted from the samples (their code phase and Doppler refined, their phasor measured
+//! every millisecond), and [`Acquisition::cancellation_check`] tells a satellite
+//! (it keeps its power with them cancelled) from their cross-correlation (it loses it).
+//!
 //! # Refinement
 //! The code phase is refined by the triangle interpolation of the peak and its two code
 //! neighbours, the Doppler by a parabola through the peak amplitudes of the neighbouring
@@ -60,6 +69,7 @@
 //! choice). Per PRN: `bins · K` × (mixing of 1 ms of samples + two FFTs); a candidate's dwell
 //! adds `3 · K` of those; the cross-correlation test `K` ms of direct correlation per signal.
 
+mod cancel;
 mod check;
 mod scan;
 mod tone;
@@ -68,7 +78,8 @@ use super::fft::{Complex, Fft};
 use crate::error::{Error, ErrorKind};
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ};
 
-pub use check::{CrossCheck, KnownSignal};
+pub use cancel::{MAX_CANCELLED, REFINE_MS, REFINE_STEP_CHIPS};
+pub use check::{CancellationCheck, CrossCheck, KnownSignal, CANCELLATION_KEEP_FRACTION};
 pub use scan::EXCISION_FACTOR;
 pub use tone::TONE_FACTOR;
 
@@ -231,6 +242,9 @@ pub struct SearchReport {
     pub verification_metric: f32,
     /// The dwell's threshold (0 when not run).
     pub verification_threshold: f32,
+    /// Interference was found in these samples (continuous-wave tones cancelled): a
+    /// background that is not thermal may owe it to that rather than to other satellites.
+    pub interference: bool,
 }
 
 /// The acquisition engine with its fixed workspace (`N` bins per millisecond).
@@ -247,6 +261,9 @@ pub struct Acquisition<const N: usize> {
     /// Tones cancelled from these samples, the first `tone_count`.
     tones: [tone::Tone; tone::MAX_TONES],
     tone_count: usize,
+    /// Known signals cancelled from these samples, the first `cancelled_count`.
+    cancelled: [cancel::Cancelled; MAX_CANCELLED],
+    cancelled_count: usize,
 }
 
 impl<const N: usize> Acquisition<N> {
@@ -268,6 +285,8 @@ impl<const N: usize> Acquisition<N> {
             level: 0.0,
             tones: [tone::Tone::default(); tone::MAX_TONES],
             tone_count: 0,
+            cancelled: [cancel::Cancelled::default(); MAX_CANCELLED],
+            cancelled_count: 0,
         })
     }
 
@@ -308,9 +327,36 @@ impl<const N: usize> Acquisition<N> {
         first_sample: u64,
         config: &AcquisitionConfig,
     ) -> Result<SearchReport, AcquisitionError> {
+        self.search_report_cancelling(prn, i, q, first_sample, config, &[])
+    }
+
+    /// [`Acquisition::search_report`] on the samples with the `known` signals (detected or
+    /// tracked on these samples; entries of `prn` skipped, at most [`MAX_CANCELLED`], the
+    /// first ones) cancelled from every millisecond of the search and of its dwell (see
+    /// the module documentation): the second look at a PRN that stronger satellites masked,
+    /// their cross-correlation gone from the background and from its cells.
+    ///
+    /// Bounded: as [`Acquisition::search`], each millisecond with one more pass over its
+    /// samples per signal cancelled, plus `9 + 1` passes over [`REFINE_MS`] ms per signal
+    /// to refine it.
+    ///
+    /// # Errors
+    /// As [`Acquisition::search`], and [`AcquisitionError::NonFinite`] for a non-finite
+    /// known signal.
+    pub fn search_report_cancelling(
+        &mut self,
+        prn: Prn,
+        i: &[i8],
+        q: Option<&[i8]>,
+        first_sample: u64,
+        config: &AcquisitionConfig,
+        known: &[KnownSignal],
+    ) -> Result<SearchReport, AcquisitionError> {
         check_inputs(i, q, config)?;
+        check_known(known)?;
         let dc = input_mean(i, q, config.samples_needed());
         self.prepare_interference(i, q, config, dc);
+        self.set_cancellation(prn, known, i, q, config, dc);
         self.prepare_code(prn);
         let grid = scan::Grid::search(config);
         let (peak, floor) = self.scan(i, q, &grid, None, config, dc);
@@ -351,6 +397,7 @@ impl<const N: usize> Acquisition<N> {
             verification: dwell.verification,
             verification_metric: dwell.metric,
             verification_threshold: dwell.threshold,
+            interference: self.tone_count > 0,
         })
     }
 }
@@ -371,6 +418,18 @@ fn check_inputs(
         }
     }
     Ok(())
+}
+
+/// Refuses known signals with a non-finite Doppler or code phase.
+fn check_known(known: &[KnownSignal]) -> Result<(), AcquisitionError> {
+    if known
+        .iter()
+        .all(|k| k.doppler_hz.is_finite() && k.code_phase_chips.is_finite())
+    {
+        Ok(())
+    } else {
+        Err(AcquisitionError::NonFinite)
+    }
 }
 
 /// The mean of the first `n` samples (fewer if the slices are shorter), `[I, Q]`.
@@ -670,5 +729,65 @@ mod tests {
             )
             .unwrap();
         assert!(!check.explained, "{check:?}");
+    }
+
+    /// Cancelling a noise-free strong satellite (its search's Doppler and code phase, off by
+    /// a fraction of a bin: the cancellation refines them) removes its cross-correlation:
+    /// every absent PRN's strongest peak loses most of its power (it was the strong
+    /// satellite's) and the background returns to thermal; a real weak satellite keeps its
+    /// power and is detected in the search with the strong one cancelled.
+    #[test]
+    fn cancelling_a_strong_satellite_removes_its_cross_correlation() {
+        let strong: Sat = (5, 40.0, 1000.0, 100.0);
+        let weak: Sat = (9, 3.0, -500.0, 700.4);
+        let (i, q) = samples(&[strong, weak], 8.0, (0.0, 0.0), 6);
+        let mut e = engine();
+        let found = e.search(prn(5), &i, Some(&q), 0, &config()).unwrap();
+        assert!(found.detected, "{found:?}");
+        let known = [KnownSignal::from(&found)];
+        let mut worst = 0.0f32;
+        for p in (1..=32).filter(|&p| p != 5 && p != 9) {
+            let r = e.search_report(prn(p), &i, Some(&q), 0, &config()).unwrap();
+            let check = e
+                .cancellation_check(
+                    &r.result,
+                    &known,
+                    &i,
+                    Some(&q),
+                    &config(),
+                    CANCELLATION_KEEP_FRACTION,
+                )
+                .unwrap();
+            assert_eq!(check.cancelled, 1);
+            worst = worst.max(check.cancelled_power / check.power);
+            let c = e
+                .search_report_cancelling(prn(p), &i, Some(&q), 0, &config(), &known)
+                .unwrap();
+            assert!(!c.result.detected, "PRN {p}: {c:?}");
+        }
+        std::eprintln!("largest power kept by an absent PRN's peak: {worst}");
+        assert!(worst < CANCELLATION_KEEP_FRACTION, "{worst}");
+        // The strong satellite's cross-correlation dominates the noise: without the
+        // cancellation the background repeats every millisecond, with it it is thermal.
+        let plain = e.search_report(prn(9), &i, Some(&q), 0, &config()).unwrap();
+        let r = e
+            .search_report_cancelling(prn(9), &i, Some(&q), 0, &config(), &known)
+            .unwrap();
+        assert!(plain.effective_ms < 4, "{plain:?}");
+        assert!(r.result.detected, "{r:?}");
+        assert_eq!(r.effective_ms, 4, "{r:?}");
+        assert!(r.noise_floor < 0.5 * plain.noise_floor, "{r:?} {plain:?}");
+        assert!((r.result.doppler_hz + 500.0).abs() < 150.0, "{r:?}");
+        let check = e
+            .cancellation_check(
+                &r.result,
+                &known,
+                &i,
+                Some(&q),
+                &config(),
+                CANCELLATION_KEEP_FRACTION,
+            )
+            .unwrap();
+        assert!(check.kept, "{check:?}");
     }
 }

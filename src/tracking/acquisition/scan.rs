@@ -1,6 +1,7 @@
 //! The code × Doppler scan of the search and of the verification dwell, the background
 //! statistics, the refinement of the peak.
 
+use super::cancel::MAX_CANCELLED;
 use super::tone::{rotate, MAX_TONES};
 use super::{
     detection_threshold, Acquisition, AcquisitionConfig, Verification, FLOOR_GUARD_CHIPS,
@@ -343,7 +344,7 @@ impl<const N: usize> Acquisition<N> {
     /// Prepares the interference handling for these samples: the tones to cancel
     /// ([`super::tone`]) and the background line power of the spectrum after their
     /// cancellation, for [`Acquisition::excise`] (0 for silent samples, and when no line
-    /// of millisecond 0 stands out: nothing to excise).
+    /// of millisecond 0 stands out: nothing to excise). Clears the cancelled signals.
     pub(super) fn prepare_interference(
         &mut self,
         i: &[i8],
@@ -353,6 +354,7 @@ impl<const N: usize> Acquisition<N> {
     ) {
         self.level = 0.0;
         self.tone_count = 0;
+        self.cancelled_count = 0;
         let level = self.spectrum_level(i, q, config, dc);
         let level = if self.find_tones(i, q, level, config, dc) > 0 {
             self.spectrum_level(i, q, config, dc)
@@ -461,6 +463,14 @@ impl<const N: usize> Acquisition<N> {
             *p = t.step().wrapping_mul(start as u32);
             *a = t.phasor(m, i, q, config, dc);
         }
+        // The known signals cancelled: each one's phasor over this millisecond, and its
+        // replica's phase words at the first sample.
+        let cancelled = self.cancelled.get(..self.cancelled_count).unwrap_or(&[]);
+        let mut replicas = [(0u32, 0u64, [0.0f32; 2]); MAX_CANCELLED];
+        for (r, c) in replicas.iter_mut().zip(cancelled) {
+            let (carrier, code) = c.at(start);
+            *r = (carrier, code, c.phasor(m, i, q, config, dc));
+        }
         for k in start..end {
             let mut x = f32::from(i.get(k).copied().unwrap_or(0)) - dc[0];
             let mut y = q.and_then(|q| q.get(k)).map_or(0.0, |v| f32::from(*v) - dq);
@@ -471,6 +481,15 @@ impl<const N: usize> Acquisition<N> {
                     y -= v[1];
                 }
                 *p = p.wrapping_add(t.step());
+            }
+            for ((carrier, code, a), c) in replicas.iter_mut().zip(cancelled) {
+                let v = rotate(*a, *carrier);
+                let chip = c.chip(*code);
+                x -= chip * v[0];
+                if q.is_some() {
+                    y -= chip * v[1];
+                }
+                c.step(carrier, code);
             }
             let idx = carrier_index(phase);
             let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
