@@ -600,7 +600,10 @@ fn the_leo_filter_coasts_through_a_60_s_outage() {
     let (p, v) = truth.ecef(300.0);
     let before = (Vector3::from(f.state().position_m) - p).norm();
     let before_v = (Vector3::from(f.state().velocity_m_s) - v).norm();
-    assert!(before < 10.0 && before_v < 0.1, "{before} m, {before_v} m/s");
+    assert!(
+        before < 10.0 && before_v < 0.1,
+        "{before} m, {before_v} m/s"
+    );
     // outage: predictions only, every second (aiding continues)
     let mut worst = 0.0f64;
     for k in 301..=360 {
