@@ -274,10 +274,6 @@ fn headline_table(m: &serde_json::Map<String, serde_json::Value>) -> String {
         ),
         ("`rms_over_limit`", t("rms_over_limit")),
         (
-            "`loop_noise_deg`: the 1 Hz loop's design noise",
-            format!("{}°", t("loop_noise_deg")),
-        ),
-        (
             "`nees_mean`, `nees_in_band` (95 % band)",
             format!("{}, {} %", t("nees_mean"), pct("nees_in_band")),
         ),
@@ -332,7 +328,7 @@ fn write_headline(
         std::fs::read_to_string(readme).with_context(|| format!("reading {}", readme.display()))?;
     let block = format!(
         "{HEADLINE_BEGIN}\n\nSeed {SEED}, `host-sim run {} --variant {} --json`, commit {} ({}); the \
-         full set with units and meanings is in [docs/RESULTS.md](docs/RESULTS.md).\n\n{}\n{HEADLINE_END}",
+         full set with units and meanings is in [docs/RESULTS.md](docs/RESULTS.md).\n\n{}{HEADLINE_END}",
         HEADLINE_RUN.0,
         HEADLINE_RUN.1,
         commit(),
