@@ -167,7 +167,7 @@ fn tracking_receiver(flight: &mut ExampleFlight) -> AttitudeReceiver {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 100, ..ProptestConfig::default() })]
 
     #[test]
     fn any_call_sequence_leaves_a_receiver_that_recovers(calls in prop::collection::vec(call(), 1..60)) {

@@ -220,7 +220,7 @@ fn poisoned_front() -> impl Strategy<Value = SampleFrontConfig> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 100, ..ProptestConfig::default() })]
 
     #[test]
     fn any_call_sequence_on_the_sample_receiver_refuses_cleanly_and_recovers(
