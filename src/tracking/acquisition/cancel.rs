@@ -100,7 +100,8 @@ impl Cancelled {
     #[inline(always)]
     pub(super) fn step(&self, carrier: &mut u32, code: &mut u64) {
         *carrier = carrier.wrapping_add(self.carrier_step);
-        *code += self.code_step;
+        // (both below CODE_WRAP, far from u64::MAX: the sum cannot wrap)
+        *code = code.wrapping_add(self.code_step);
         if *code >= CODE_WRAP {
             *code -= CODE_WRAP;
         }
@@ -118,7 +119,10 @@ impl Cancelled {
     ) -> Complex {
         let gain = if q.is_some() { 1.0 } else { 2.0 };
         let dq = if q.is_some() { dc[1] } else { 0.0 };
-        let (start, end) = (config.ms_start(m), config.ms_start(m + 1).min(i.len()));
+        let (start, end) = (
+            config.ms_start(m),
+            config.ms_start(m.saturating_add(1)).min(i.len()),
+        );
         let (mut carrier, mut code) = self.at(start);
         let (mut sr, mut si) = (0.0f32, 0.0f32);
         for k in start..end {
@@ -156,23 +160,30 @@ fn refined(
             })
             .sum::<f32>()
     };
-    let (mut best, mut best_k, mut powers) = (f32::MIN, 0i32, [0.0f32; 9]);
-    for (slot, k) in powers.iter_mut().zip(-REFINE_OFFSETS..=REFINE_OFFSETS) {
+    let (mut best, mut best_k, mut idx, mut powers) = (f32::MIN, 0i32, 0usize, [0.0f32; 9]);
+    let slots = 0..powers.len();
+    for ((j, slot), k) in slots
+        .zip(powers.iter_mut())
+        .zip(-REFINE_OFFSETS..=REFINE_OFFSETS)
+    {
         let p = power_at(
             s.code_phase_chips + f64::from(k) * REFINE_STEP_CHIPS,
             doppler,
         );
         *slot = p;
         if p > best {
-            (best, best_k) = (p, k);
+            (best, best_k, idx) = (p, k, j);
         }
     }
     // Parabola through the amplitudes of the best offset and its neighbours.
-    let idx = (best_k + REFINE_OFFSETS) as usize;
     let amp = |j: usize| powers.get(j).map_or(0.0, |p| libm::sqrtf(p.max(0.0)));
-    let (am, a0, ap) = (amp(idx.wrapping_sub(1)), amp(idx), amp(idx + 1));
+    let (am, a0, ap) = (
+        amp(idx.wrapping_sub(1)),
+        amp(idx),
+        amp(idx.saturating_add(1)),
+    );
     let curv = 2.0 * a0 - am - ap;
-    let delta = if curv > 0.0 && idx > 0 && idx + 1 < powers.len() {
+    let delta = if curv > 0.0 && idx > 0 && idx.saturating_add(1) < powers.len() {
         (0.5 * (ap - am) / curv).clamp(-0.5, 0.5)
     } else {
         0.0
@@ -215,7 +226,7 @@ impl<const N: usize> Acquisition<N> {
         let others = signals.iter().filter(|s| s.prn != prn);
         for (slot, s) in self.cancelled.iter_mut().zip(others) {
             *slot = refined(s, i, q, config, dc);
-            count += 1;
+            count = count.saturating_add(1);
         }
         self.cancelled_count = count;
         count
