@@ -268,15 +268,18 @@ fn next_start(start: u64) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    extern crate std;
-    use std::vec;
-    use std::vec::Vec;
+    use heapless::Vec;
 
     use super::super::parity::{encode_word, solve_trailing_zeros};
     use super::*;
 
+    /// Bits of one subframe.
+    const SUBFRAME: usize = 300;
+    /// Room for the test stream: a preamble run and three subframes.
+    const STREAM: usize = 1024;
+
     /// Encodes ten data words into 300 transmitted bits after a word ending in `prev`.
-    fn encode(words: &[u32; 10], mut prev: (bool, bool)) -> Vec<bool> {
+    fn encode(words: &[u32; 10], mut prev: (bool, bool)) -> Vec<bool, SUBFRAME> {
         let mut bits = Vec::new();
         for (w, &d) in words.iter().enumerate() {
             let d = if w == 1 || w == 9 {
@@ -286,7 +289,7 @@ mod tests {
             };
             let t = encode_word(d, prev.0, prev.1);
             for i in (0..30).rev() {
-                bits.push((t >> i) & 1 == 1);
+                bits.push((t >> i) & 1 == 1).expect("300 bits");
             }
             prev = ((t >> 1) & 1 == 1, t & 1 == 1);
         }
@@ -308,7 +311,7 @@ mod tests {
         bits: &[bool],
         first_epoch: u64,
         invert: bool,
-    ) -> Vec<Result<Option<Subframe>, SubframeError>> {
+    ) -> Vec<Result<Option<Subframe>, SubframeError>, STREAM> {
         bits.iter()
             .enumerate()
             .map(|(k, &b)| {
@@ -321,14 +324,15 @@ mod tests {
             .collect()
     }
 
-    fn stream() -> (Vec<bool>, Vec<[u32; 10]>) {
-        let mut bits = vec![true, false, true, true, false, false, true, false];
+    fn stream() -> (Vec<bool, STREAM>, Vec<[u32; 10], 3>) {
+        let mut bits: Vec<bool, STREAM> =
+            Vec::from_slice(&[true, false, true, true, false, false, true, false]).expect("room");
         bits.extend([false, false]);
         let mut words = Vec::new();
         for k in 0..3u32 {
             let w = subframe_words(1000 + k, k % 5 + 1, 0x5A_5A5A ^ k);
             bits.extend(encode(&w, (false, false)));
-            words.push(w);
+            words.push(w).expect("three subframes");
         }
         (bits, words)
     }
@@ -338,7 +342,7 @@ mod tests {
         let (bits, words) = stream();
         for invert in [false, true] {
             let mut sync = SubframeSync::new();
-            let out: Vec<Subframe> = feed(&mut sync, &bits, 500, invert)
+            let out: Vec<Subframe, 3> = feed(&mut sync, &bits, 500, invert)
                 .into_iter()
                 .filter_map(|r| r.unwrap())
                 .collect();
@@ -363,7 +367,7 @@ mod tests {
         bits[at] = !bits[at];
         let mut sync = SubframeSync::new();
         let results = feed(&mut sync, &bits, 0, false);
-        let errors: Vec<_> = results.iter().filter_map(|r| r.err()).collect();
+        let errors: Vec<_, STREAM> = results.iter().filter_map(|r| r.err()).collect();
         assert_eq!(errors.len(), 1);
         assert!(matches!(errors[0], SubframeError::Parity { word: 5, .. }));
         assert_eq!(

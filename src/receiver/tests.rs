@@ -69,10 +69,15 @@ use crate::attitude::one_stage::SatelliteObservation;
 use crate::gyro::CalibrationError;
 use crate::receiver::{ConfigError, LossReason, ReceiverError};
 
-fn events(r: &mut AttitudeReceiver) -> std::vec::Vec<ReceiverEvent> {
-    let mut v = std::vec::Vec::new();
+/// Room for the events a test collects (its receiver queues at most `EVENT_QUEUE` at once).
+type Events = heapless::Vec<ReceiverEvent, 1024>;
+/// Room for one error/σ ratio per 10 ms of a test's flight.
+type Ratios = heapless::Vec<Option<f32>, 4096>;
+
+fn events(r: &mut AttitudeReceiver) -> Events {
+    let mut v = Events::new();
     while let Some(e) = r.pop_event() {
-        v.push(e);
+        v.push(e).expect("room for the test's events");
     }
     v
 }
@@ -81,8 +86,6 @@ fn error_deg(r: &AttitudeReceiver, f: &ExampleFlight) -> f32 {
     let a = r.attitude();
     a.q_rb.angle_to(&f.attitude(a.epoch)).to_degrees()
 }
-
-extern crate std;
 
 #[test]
 fn cold_start_hands_over_to_the_fine_filter_with_and_without_a_gyro() {
@@ -305,12 +308,7 @@ fn outage(
     gyro: bool,
     gap: u64,
     gyro_in_gap: bool,
-) -> (
-    std::vec::Vec<ReceiverEvent>,
-    Option<u64>,
-    AttitudeReceiver,
-    ExampleFlight,
-) {
+) -> (Events, Option<u64>, AttitudeReceiver, ExampleFlight) {
     let mut f = ExampleFlight::new(21);
     let mut r = AttitudeReceiver::new(ExampleFlight::config(gyro)).unwrap();
     f.fly(&mut r, 0, 2000).unwrap();
@@ -395,8 +393,8 @@ fn fly_with_gyro(
     from: u64,
     to: u64,
     fault: impl Fn(u64, [f32; 3]) -> [f32; 3],
-) -> std::vec::Vec<Option<f32>> {
-    let mut ratios = std::vec::Vec::new();
+) -> Ratios {
+    let mut ratios = Ratios::new();
     for k in from..to {
         if k % 100 == 0 {
             r.set_aiding(&f.aiding(k)).unwrap();
@@ -412,14 +410,16 @@ fn fly_with_gyro(
         if k % 10 == 9 {
             r.close_through(k);
             let a = r.attitude();
-            ratios.push((a.source != AttitudeSource::None).then(|| {
-                let truth = f.attitude(a.epoch);
-                let e = (a.q_rb.conjugate() * truth).to_rotation_vector();
-                let sigma = a.covariance.diagonal().map(|v| v.max(0.0).sqrt());
-                (0..3)
-                    .map(|i| e[i].abs() / sigma[i].max(1e-9))
-                    .fold(0.0, f32::max)
-            }));
+            ratios
+                .push((a.source != AttitudeSource::None).then(|| {
+                    let truth = f.attitude(a.epoch);
+                    let e = (a.q_rb.conjugate() * truth).to_rotation_vector();
+                    let sigma = a.covariance.diagonal().map(|v| v.max(0.0).sqrt());
+                    (0..3)
+                        .map(|i| e[i].abs() / sigma[i].max(1e-9))
+                        .fold(0.0, f32::max)
+                }))
+                .expect("room for the flight's ratios");
         }
     }
     ratios
@@ -459,15 +459,7 @@ fn a_faulty_gyro_is_excluded_and_the_reported_sigma_keeps_covering_the_error() {
                 "{name}: {ev:?}"
             );
         }
-        if std::env::var_os("GA_DEBUG").is_some() {
-            for (i, x) in ratios.iter().enumerate() {
-                if x.is_none_or(|v| v > 3.0) {
-                    std::eprintln!("{name} {}: {x:?}", 60_000 + i * 10);
-                }
-            }
-            std::eprintln!("{ev:?}");
-        }
-        let with: std::vec::Vec<f32> = ratios.iter().flatten().copied().collect();
+        let with: heapless::Vec<f32, 4096> = ratios.iter().flatten().copied().collect();
         let covered = with.iter().filter(|&&x| x <= 3.0).count() as f32 / with.len() as f32;
         let worst = with.iter().fold(0.0f32, |a, &b| a.max(b));
         // (a fault is seen only once the error it causes exceeds the snapshot's own noise,

@@ -521,11 +521,20 @@ impl Error for AcquisitionError {
 
 #[cfg(test)]
 mod tests {
-    extern crate std;
     use super::*;
     use crate::noise::{SplitMix64, StandardNormal};
     use crate::signal::ca_code::CA_CODE_LENGTH;
-    use std::vec::Vec;
+    use heapless::Vec;
+
+    /// Room for the samples a search of [`config`] reads (8 ms at 2.046 Msps, plus one).
+    const SAMPLES: usize = 16_384;
+    /// A recording of samples.
+    type Samples = Vec<i8, SAMPLES>;
+
+    /// `n` samples of the constant `v`.
+    fn constant(v: i8, n: usize) -> Samples {
+        core::iter::repeat_n(v, n.min(SAMPLES)).collect()
+    }
 
     const FS: f64 = 2.046e6;
 
@@ -548,11 +557,11 @@ mod tests {
     type Sat = (u8, f64, f64, f64);
 
     /// Complex samples: the satellites (no data bits) plus noise of `sigma` LSB, rounded.
-    fn samples(sats: &[Sat], sigma: f32, dc: (f64, f64), seed: u64) -> (Vec<i8>, Vec<i8>) {
+    fn samples(sats: &[Sat], sigma: f32, dc: (f64, f64), seed: u64) -> (Samples, Samples) {
         let n = config().samples_needed();
         let mut rng = SplitMix64::new(seed);
         let mut normal = StandardNormal::new();
-        let (mut i, mut q) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut i, mut q) = (Samples::new(), Samples::new());
         for k in 0..n {
             let t = k as f64 / FS;
             let (mut x, mut y) = (dc.0, dc.1);
@@ -565,14 +574,16 @@ mod tests {
             }
             x += f64::from(sigma * normal.sample(&mut rng));
             y += f64::from(sigma * normal.sample(&mut rng));
-            i.push(libm::round(x).clamp(-128.0, 127.0) as i8);
-            q.push(libm::round(y).clamp(-128.0, 127.0) as i8);
+            i.push(libm::round(x).clamp(-128.0, 127.0) as i8)
+                .expect("room for a search");
+            q.push(libm::round(y).clamp(-128.0, 127.0) as i8)
+                .expect("room for a search");
         }
         (i, q)
     }
 
-    fn engine() -> std::boxed::Box<Acquisition<1024>> {
-        std::boxed::Box::new(Acquisition::new().unwrap())
+    fn engine() -> Acquisition<1024> {
+        Acquisition::new().unwrap()
     }
 
     /// A satellite in thermal noise is a candidate, passes the dwell, and comes out at its
@@ -619,7 +630,7 @@ mod tests {
         };
         assert_eq!(huge.doppler_bins(), usize::MAX);
         let n = config().samples_needed();
-        let (i, q) = (std::vec![1i8; n], std::vec![-1i8; n]);
+        let (i, q) = (constant(1, n), constant(-1, n));
         assert_eq!(
             engine().search(prn(3), &i, Some(&q), 0, &huge),
             Err(AcquisitionError::InvalidConfig)
@@ -643,7 +654,7 @@ mod tests {
         };
         assert_eq!(nan.samples_needed(), 1);
         let n = config().samples_needed();
-        let (i, q) = (std::vec![1i8; n], std::vec![-1i8; n]);
+        let (i, q) = (constant(1, n), constant(-1, n));
         for bad in [inf, nan] {
             assert_eq!(
                 engine().search(prn(3), &i, Some(&q), 0, &bad),
@@ -659,7 +670,7 @@ mod tests {
         let n = config().samples_needed();
         let mut e = engine();
         for value in [0i8, 127, -128, 20] {
-            let (i, q) = (std::vec![value; n], std::vec![value / 2; n]);
+            let (i, q) = (constant(value, n), constant(value / 2, n));
             for p in 1..=32 {
                 let r = e.search(prn(p), &i, Some(&q), 0, &config()).unwrap();
                 assert!(!r.detected, "constant {value}: PRN {p} {r:?}");
@@ -765,7 +776,6 @@ mod tests {
                 .unwrap();
             assert!(!c.result.detected, "PRN {p}: {c:?}");
         }
-        std::eprintln!("largest power kept by an absent PRN's peak: {worst}");
         assert!(worst < CANCELLATION_KEEP_FRACTION, "{worst}");
         // The strong satellite's cross-correlation dominates the noise: without the
         // cancellation the background repeats every millisecond, with it it is thermal.
