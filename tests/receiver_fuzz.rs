@@ -186,8 +186,9 @@ proptest! {
                 "{:?} after {:?}", q, call
             );
         }
-        // the valid signals again, from the epoch after the latest the receiver has seen
-        let from = receiver.epoch().map_or(0, |e| e + 1);
+        // the valid signals again, from the first aiding epoch (the flight aids every 100
+        // epochs) after the latest epoch the receiver has seen
+        let from = receiver.epoch().map_or(0, |e| (e + 1).div_ceil(100) * 100);
         let to = from + 20_000;
         flight.fly(&mut receiver, from, to).unwrap();
         let att = receiver.attitude();

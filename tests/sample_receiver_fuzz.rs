@@ -243,8 +243,9 @@ proptest! {
         let (i, q) = (samples(2600, 9), samples(2600, 10));
         let block = SampleBlock::complex(next, [&i; 3], [&q; 3]).unwrap();
         prop_assert!(rx.push_samples(&block).is_ok(), "after {:?}", calls);
-        // valid observations from the epoch after the latest the receiver has seen
-        let from = rx.receiver().epoch().map_or(0, |e| e + 1);
+        // valid observations from the first aiding epoch (the flight aids every 100 epochs)
+        // after the latest epoch the receiver has seen
+        let from = rx.receiver().epoch().map_or(0, |e| (e + 1).div_ceil(100) * 100);
         prop_assume!(from < 1 << 50);
         let mut flight = ExampleFlight::new(7);
         flight.fly(rx.receiver_mut(), from, from + 1500).unwrap();
