@@ -115,7 +115,11 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
 /// Every budget of the firmware, in region order.
 pub fn run_all() -> Option<ReceiverOutcome> {
     ekf_budgets();
-    signal_budgets();
+    correlator_budgets();
+    bitwise_budgets();
+    packing_budgets();
+    tracking_budgets();
+    acquisition_budget();
     snapshot_budgets();
     dcm_budgets();
     gyro_budgets();
@@ -480,7 +484,7 @@ fn one_stage_budget<const N: usize>(
 // (not inlined: each group's locals get a frame of their own, so the stack is the largest
 // group's, not the sum of all)
 #[inline(never)]
-fn signal_budgets() {
+fn correlator_budgets() {
     let s = &SIGNAL_SAMPLES;
     let i = [&s[0][..], &s[1][..], &s[2][..]];
     let q = [&s[3][..], &s[4][..], &s[5][..]];
@@ -522,8 +526,14 @@ fn signal_budgets() {
             });
         }
     }
-    bitwise_budgets();
-    packing_budgets();
+}
+
+/// One tracking epoch and the refinement's frequency estimates.
+#[inline(never)]
+fn tracking_budgets() {
+    let s = &SIGNAL_SAMPLES;
+    let i = [&s[0][..], &s[1][..], &s[2][..]];
+    let q = [&s[3][..], &s[4][..], &s[5][..]];
     // One tracking epoch: correlator + discriminators + loop filters + lock/C/N0 windows.
     let ch_cfg = ChannelConfig::new(SIGNAL_SELF_TEST_RATE_HZ, 0.0);
     if let (Some(prn), Ok(block)) = (Prn::new(5), SampleBlock::complex(0, i, q)) {
@@ -565,20 +575,30 @@ fn signal_budgets() {
             black_box(150.0),
         )
     });
-    // Acquisition: one Doppler bin x one millisecond, N = 1024 (the target's size).
-    if let (Ok(mut acq), Some(prn)) = (Acquisition::<1024>::new(), Prn::new(5)) {
-        let cfg = AcquisitionConfig {
-            sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
-            intermediate_frequency_hz: 0.0,
-            doppler_max_hz: 0.0,
-            doppler_step_hz: 500.0,
-            noncoherent_ms: 1,
-            false_alarm_probability: 1e-3,
-        };
-        let _ = measure("acquisition N=1024: 1 PRN x 1 Doppler bin x 1 ms (mix, 2 FFTs, threshold)", || {
-            black_box(&mut acq).search(prn, black_box(&s[0][..]), Some(black_box(&s[3][..])), 0, &cfg).is_ok()
-        });
-    }
+}
+
+/// Acquisition: one Doppler bin x one millisecond, N = 1024 (the target's size). Its own
+/// frame: the engine is the largest object of the self-check (tens of KiB).
+#[inline(never)]
+fn acquisition_budget() {
+    let s = &SIGNAL_SAMPLES;
+    // (the engine bound directly, not through a tuple: one copy of it on the stack, not two)
+    let Ok(mut acq) = Acquisition::<1024>::new() else {
+        hprintln!("budget acquisition: engine refused");
+        return;
+    };
+    let Some(prn) = Prn::new(5) else { return };
+    let cfg = AcquisitionConfig {
+        sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
+        intermediate_frequency_hz: 0.0,
+        doppler_max_hz: 0.0,
+        doppler_step_hz: 500.0,
+        noncoherent_ms: 1,
+        false_alarm_probability: 1e-3,
+    };
+    let _ = measure("acquisition N=1024: 1 PRN x 1 Doppler bin x 1 ms (mix, 2 FFTs, threshold)", || {
+        black_box(&mut acq).search(prn, black_box(&s[0][..]), Some(black_box(&s[3][..])), 0, &cfg).is_ok()
+    });
 }
 
 /// Epochs of the receiver's example flight on the target (3 s: the cold start, the fine
