@@ -30,8 +30,8 @@ use gnss_attitude::signal::bitwise::{
     PlaneFormat, Resolution,
 };
 use gnss_attitude::signal::{
-    Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat,
-    SlaveTaps, CA_CHIP_RATE_HZ, GPS_L1_HZ,
+    Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, SlaveTaps,
+    CA_CHIP_RATE_HZ, GPS_L1_HZ,
 };
 use nalgebra::{Matrix3, Vector3};
 
@@ -164,7 +164,8 @@ impl Engines {
 }
 
 fn prompts(e: &EpochCorrelations<ANTENNAS>) -> Option<[Iq; ANTENNAS]> {
-    e.complete.then(|| core::array::from_fn(|a| e.taps[a].prompt))
+    e.complete
+        .then(|| core::array::from_fn(|a| e.taps[a].prompt))
 }
 
 /// Runs an `i8` correlator over a decoded block; complete epochs' prompts into `out`.
@@ -245,7 +246,10 @@ pub fn post_correlation_snr(prompts: &[[Iq; ANTENNAS]], n: usize) -> f64 {
     let (mut signal, mut noise) = (0.0, 0.0);
     for a in 0..ANTENNAS {
         let z = |e: &[Iq; ANTENNAS]| (f64::from(e[a].i), f64::from(e[a].q));
-        let (mi, mq) = p.iter().map(z).fold((0.0, 0.0), |s, (i, q)| (s.0 + i, s.1 + q));
+        let (mi, mq) = p
+            .iter()
+            .map(z)
+            .fold((0.0, 0.0), |s, (i, q)| (s.0 + i, s.1 + q));
         let (mi, mq) = (mi / count, mq / count);
         signal += mi * mi + mq * mq;
         noise += p

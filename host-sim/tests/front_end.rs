@@ -47,7 +47,10 @@ fn quantized_front_ends_lower_the_tracked_cn0_by_the_quantization_loss() {
             mean_cn0(&reference),
             own.len()
         );
-        assert!(band.contains(&loss), "{q}: loss {loss:.2} dB outside {band:?}");
+        assert!(
+            band.contains(&loss),
+            "{q}: loss {loss:.2} dB outside {band:?}"
+        );
     }
 }
 
@@ -69,9 +72,18 @@ fn open_loop_losses_of_the_bit_parallel_paths_follow_theory() {
         );
         assert!(l.open_loop_epochs >= 990, "{} epochs", l.open_loop_epochs);
         let near = |x: f64, t: f64| (x - t).abs() < 0.3;
-        assert!(near(l.open_loop_sample_loss_db, sample_theory), "{q} samples");
-        assert!(near(l.open_loop_carrier_loss_db_2level, 0.91), "{q} 2-level");
-        assert!(near(l.open_loop_carrier_loss_db_3level, 0.35), "{q} 3-level");
+        assert!(
+            near(l.open_loop_sample_loss_db, sample_theory),
+            "{q} samples"
+        );
+        assert!(
+            near(l.open_loop_carrier_loss_db_2level, 0.91),
+            "{q} 2-level"
+        );
+        assert!(
+            near(l.open_loop_carrier_loss_db_3level, 0.35),
+            "{q} 3-level"
+        );
     }
 }
 

@@ -33,10 +33,10 @@ use serde_json::json;
 use super::{Outcome, RunContext, Scenario, Variant, Variants};
 use crate::arrays::triangle;
 use crate::chain::{self, ChainOutput, ChainParams};
+use crate::open_loop::{open_loop_losses, OpenLoopLosses, OPEN_LOOP_EPOCHS};
 use crate::report::{plot_panels, progress, write_csv, Panel, Series};
 use crate::stats::phase_difference_rms_cycles;
 use crate::synth::file::{read_streams, write_streams};
-use crate::open_loop::{open_loop_losses, OpenLoopLosses, OPEN_LOOP_EPOCHS};
 use crate::synth::quantize::{encode, Quantizer};
 use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 

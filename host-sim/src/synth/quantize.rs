@@ -88,7 +88,11 @@ impl Quantizer {
         match self {
             Self::I8 => None,
             Self::Sm2 => Some(sign_magnitude(two_bit(x)) * SM2_LSB_PER_LEVEL),
-            Self::Bit1 => Some(if x < 0.0 { -BIT1_LSB_PER_LEVEL } else { BIT1_LSB_PER_LEVEL }),
+            Self::Bit1 => Some(if x < 0.0 {
+                -BIT1_LSB_PER_LEVEL
+            } else {
+                BIT1_LSB_PER_LEVEL
+            }),
         }
     }
 

@@ -31,8 +31,8 @@ use rayon::prelude::*;
 use super::fast_path::EPOCH_S;
 use super::world::{World, MASK_RAD};
 use crate::chain::{samples, ChainParams, ANTENNAS};
-use crate::synth::quantize::Quantizer;
 use crate::synth::quantize::Planar;
+use crate::synth::quantize::Quantizer;
 use crate::synth::scene::{mix, L1_WAVELENGTH};
 use crate::synth::{AttitudeMotion, CarrierStep, FrontEnd, Satellite, SatelliteTrack, Scene};
 

@@ -12,9 +12,9 @@ use nalgebra::Matrix3;
 
 use super::bound::{information_rate, information_rate_three_angles, loop_bound_arcmin};
 use super::samples::SampleLevel;
-use crate::synth::quantize::Quantizer;
 use super::source::{EpochSource, IqFastPath, EPOCH_S};
 use super::truth::{rotation_about_y, sky_g1, Motion, SIDE_M, WAVELENGTH_M};
+use crate::synth::quantize::Quantizer;
 
 /// Prior standard deviation of the rates, rad/s (the paper's β is static; a snapshot solver
 /// reports no rate).
