@@ -454,7 +454,7 @@ impl Runs {
                 if plan.iq_only {
                     format!("I/Q fast path, {RUNS} runs")
                 } else {
-                    "samples (2.6 Msps CS8 → core acquisition, correlators, tracking, adapter), one run".into()
+                    format!("samples (2.6 Msps, front end {} → core acquisition, correlators, tracking, adapter), one run", self.front_end)
                 }
             ),
             format!(

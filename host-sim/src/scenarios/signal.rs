@@ -312,7 +312,7 @@ fn summary(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Vec<S
         .fold(0.0, f64::max);
     let mut lines = vec![
         format!(
-            "{} satellites at {cn0} dB-Hz, CS8 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
+            "{} satellites at {cn0} dB-Hz, 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
             sc.satellites.len(),
             out.acquisition_seconds,
             out.synthesis_seconds,
