@@ -38,6 +38,7 @@ fn scenario(variant: &str, runs: usize, duration: f64) -> Value {
         variant: variant.to_string(),
         seed: 7,
         out_dir: None,
+        front_end: host_sim::synth::quantize::Quantizer::I8,
     };
     let outcome = run_plan(&ctx, runs, duration).unwrap();
     Value::Object(outcome.metrics)

@@ -207,7 +207,8 @@ fn the_sample_level_path_tracks_at_the_bound_and_delivers_the_information_of_the
         input: InputPath::SampleLevel,
         ..RunConfig::paper(FilterMode::GaussianApproximation)
     };
-    let rec = std::sync::Arc::new(record(&cfg, 3).unwrap());
+    let rec =
+        std::sync::Arc::new(record(&cfg, 3, host_sim::synth::quantize::Quantizer::I8).unwrap());
     assert_eq!(rec.stats.tracked, 8);
     assert_eq!(rec.stats.late, 0);
     assert_eq!(

@@ -454,7 +454,7 @@ fn accumulators_do_not_overflow_at_the_largest_epoch() {
 // Acquisition and tracking on synthesized three-antenna samples
 
 use gnss_attitude::tracking::{Acquisition, AcquisitionConfig};
-use host_sim::synth::quantize::{decode, encode, CS16_SHIFT};
+use host_sim::synth::quantize::{decode, encode, Quantizer, CS16_SHIFT};
 use host_sim::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 use nalgebra::{Matrix3, Vector3};
 
@@ -626,6 +626,7 @@ fn tracking_holds_lock_and_recovers_phase_differences() {
         let params = ChainParams {
             scene: sc.clone(),
             format,
+            quantizer: Quantizer::I8,
             acquisition: AcquisitionConfig {
                 sample_rate_hz: fs,
                 intermediate_frequency_hz: fif,
@@ -832,6 +833,7 @@ fn tracking_holds_under_leo_doppler_rates() {
     let mut params = ChainParams {
         scene: sc.clone(),
         format: SampleFormat::Cs8,
+        quantizer: Quantizer::I8,
         acquisition: AcquisitionConfig {
             sample_rate_hz: fs,
             intermediate_frequency_hz: 0.0,

@@ -15,7 +15,7 @@ use gnss_attitude::tracking::{
 };
 use rayon::prelude::*;
 
-use crate::synth::quantize::{decode, encode, Planar};
+use crate::synth::quantize::{Planar, Quantizer};
 use crate::synth::Scene;
 
 /// Antennas of the chain (the three-antenna array).
@@ -26,8 +26,11 @@ pub const ANTENNAS: usize = 3;
 pub struct ChainParams {
     /// The scene (satellites, array, attitude, front end, noise).
     pub scene: Scene,
-    /// Front-end format the samples go through.
+    /// Front-end format the samples go through (with [`Quantizer::I8`]).
     pub format: SampleFormat,
+    /// The front end's quantizer: `format` for `i8`, else 2- or 1-bit samples handed to the
+    /// correlators as `i8` values.
+    pub quantizer: Quantizer,
     /// Acquisition set-up.
     pub acquisition: AcquisitionConfig,
     /// PRNs searched.
@@ -92,11 +95,11 @@ pub struct ChainOutput {
     pub tracking_seconds: f64,
 }
 
-/// Synthesizes `[first, first + n)` of every antenna and passes it through the format.
+/// Synthesizes `[first, first + n)` of every antenna and passes it through the front end
+/// (the quantizer; the format for `i8`).
 pub fn samples(params: &ChainParams, first: u64, n: usize) -> Result<Planar> {
     let analog = params.scene.synthesize(first, n);
-    let streams = encode(params.format, &analog)?;
-    decode(params.format, &streams, ANTENNAS, n)
+    params.quantizer.quantize(params.format, &analog, n)
 }
 
 /// A tracking channel started from an acquisition of a scene satellite.

@@ -21,6 +21,7 @@
 pub mod arrays;
 pub mod chain;
 pub mod nmea_out;
+pub mod open_loop;
 pub mod outcome;
 pub mod record;
 pub mod report;

@@ -3,7 +3,7 @@
 //! ```text
 //! host-sim                                   # the default scenario, files into out/
 //! host-sim list                              # scenarios and their variants
-//! host-sim run <scenario> [--variant V] [--seed N] [--json] [--out DIR]
+//! host-sim run <scenario> [--variant V] [--seed N] [--json] [--out DIR] [--front-end i8|sm2|bit1]
 //! host-sim acquire --file F --format FMT --fs HZ [--if HZ] [--doppler-max HZ] [--json]
 //! host-sim track --file F [--file F2 --file F3] --format FMT --fs HZ [--seconds S]
 //!                [--baselines ... --sky CSV] [--json] [--out DIR]
@@ -25,6 +25,7 @@ use host_sim::record::{
 };
 use host_sim::report::print_human;
 use host_sim::scenarios::{self, RunContext};
+use host_sim::synth::quantize::Quantizer;
 
 #[derive(Parser)]
 #[command(
@@ -57,6 +58,11 @@ enum Command {
         /// Directory for CSV time series and PNG plots (nothing is written without it).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Front end of the sample-level paths (scenarios signal, one-stage): `i8` (CS8, the
+        /// default), `sm2` (2-bit sign/magnitude) or `bit1` (1-bit); the others report their
+        /// C/N0 loss against `i8` on the same samples.
+        #[arg(long, default_value = "i8", value_parser = parse_front_end)]
+        front_end: Quantizer,
         /// Write the receiver's heading as NMEA $GPHDT/$GPTHS sentences to this file
         /// (scenario microsat).
         #[arg(long)]
@@ -310,9 +316,10 @@ fn main() -> ExitCode {
             seed,
             json,
             out,
+            front_end,
             nmea,
         }) => with_nmea(nmea.as_deref(), || {
-            run(&scenario, variant.as_deref(), seed, json, out)
+            run(&scenario, variant.as_deref(), seed, json, out, front_end)
         }),
         Some(Command::Acquire { file, search, json }) => acquire(&file, &search, json),
         Some(Command::Track(args)) => track_command(args),
@@ -331,6 +338,7 @@ fn main() -> ExitCode {
             1,
             false,
             Some(PathBuf::from("out")),
+            Quantizer::I8,
         ),
     };
     match result {
@@ -414,12 +422,17 @@ fn synth_command(args: SynthArgs) -> anyhow::Result<()> {
     synth(&out, &name, &spec)
 }
 
+fn parse_front_end(s: &str) -> Result<Quantizer, String> {
+    Quantizer::parse(s).map_err(|e| e.to_string())
+}
+
 fn run(
     name: &str,
     variant: Option<&str>,
     seed: u64,
     json: bool,
     out: Option<PathBuf>,
+    front_end: Quantizer,
 ) -> anyhow::Result<()> {
     let scenario = scenarios::find(name)?;
     let variant = scenario.variant(variant)?;
@@ -430,6 +443,7 @@ fn run(
         variant: variant.to_string(),
         seed,
         out_dir: out,
+        front_end,
     };
     let outcome = scenario.run(&ctx)?;
     let document = outcome.to_json(scenario.name, variant, seed);

@@ -13,6 +13,8 @@ use anyhow::Context;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
+use crate::synth::quantize::Quantizer;
+
 /// What a scenario run is asked to do.
 #[derive(Clone, Debug)]
 pub struct RunContext {
@@ -22,6 +24,10 @@ pub struct RunContext {
     pub seed: u64,
     /// Where to write CSV and PNG files; `None` writes nothing.
     pub out_dir: Option<PathBuf>,
+    /// The front end's quantizer of the sample-level paths (`--front-end`; only the scenarios
+    /// in [`FRONT_END_SCENARIOS`](crate::scenarios::FRONT_END_SCENARIOS) take another than
+    /// `i8`).
+    pub front_end: Quantizer,
 }
 
 /// What a scenario run produced.

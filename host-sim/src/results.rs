@@ -13,6 +13,7 @@ use anyhow::{Context, Result};
 
 use crate::report::markdown::{number, render, Rendered};
 use crate::scenarios::{self, RunContext};
+use crate::synth::quantize::Quantizer;
 
 /// The seed of every run of the report.
 pub const SEED: u64 = 1;
@@ -99,6 +100,7 @@ fn run_one(scenario: &str, variant: &str) -> Result<Section> {
             variant: variant.to_string(),
             seed: SEED,
             out_dir: None,
+            front_end: Quantizer::I8,
         })
         .with_context(|| format!("running {} / {variant}", sc.name))?;
     Ok(Section {

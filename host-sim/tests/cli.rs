@@ -68,3 +68,32 @@ fn unknown_scenario_or_variant_fails_with_a_message() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no variant"));
 }
+
+/// `--front-end` takes `i8`, `sm2`, `bit1` only, and only where there are samples: an unknown
+/// front end, a scenario without a sample-level path and a `-iq` variant are refused before
+/// anything runs.
+#[test]
+fn front_end_is_refused_where_there_are_no_samples() {
+    let refused = |args: &[&str], message: &str| {
+        let out = host_sim().args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} ran");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(message), "{args:?}: {err}");
+    };
+    refused(&["run", "signal", "--front-end", "cs16"], "no front end");
+    refused(
+        &["run", "vector-ekf", "--front-end", "sm2"],
+        "no sample-level path",
+    );
+    refused(
+        &[
+            "run",
+            "one-stage",
+            "--variant",
+            "8sat-2hz-iq",
+            "--front-end",
+            "bit1",
+        ],
+        "-iq variants have no samples",
+    );
+}

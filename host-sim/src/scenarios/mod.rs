@@ -12,6 +12,7 @@
 use anyhow::{anyhow, bail};
 
 pub use crate::outcome::{Outcome, RunContext};
+use crate::synth::quantize::Quantizer;
 
 pub mod dcm;
 pub mod gyro_cal;
@@ -32,6 +33,9 @@ pub const SCENARIOS: &[Scenario] = &[
     one_stage::SCENARIO,
     microsat::SCENARIO,
 ];
+
+/// The scenarios whose sample-level path takes `--front-end` other than `i8`.
+pub const FRONT_END_SCENARIOS: &[&str] = &["signal", "one-stage"];
 
 /// What `host-sim` runs when called without arguments.
 pub const DEFAULT_SCENARIO: &str = "microsat";
@@ -143,6 +147,14 @@ impl Scenario {
     /// # Errors
     /// No such variant, or the run's own error.
     pub fn run(&self, ctx: &RunContext) -> anyhow::Result<Outcome> {
+        if ctx.front_end != Quantizer::I8 && !FRONT_END_SCENARIOS.contains(&self.name) {
+            bail!(
+                "scenario {} has no sample-level path for --front-end {} (only {})",
+                self.name,
+                ctx.front_end,
+                FRONT_END_SCENARIOS.join(", ")
+            );
+        }
         self.variants.run(ctx)
     }
 }
@@ -164,12 +176,23 @@ pub fn find(name: &str) -> anyhow::Result<&'static Scenario> {
 /// Runs scenario `name` (variant `variant` or the default) without writing files: the entry
 /// point for tests.
 pub fn run_by_name(name: &str, variant: Option<&str>, seed: u64) -> anyhow::Result<Outcome> {
+    run_front_end(name, variant, seed, Quantizer::I8)
+}
+
+/// [`run_by_name`] with the front end `front_end` (`--front-end`).
+pub fn run_front_end(
+    name: &str,
+    variant: Option<&str>,
+    seed: u64,
+    front_end: Quantizer,
+) -> anyhow::Result<Outcome> {
     let scenario = find(name)?;
     let variant = scenario.variant(variant)?;
     scenario.run(&RunContext {
         variant: variant.to_string(),
         seed,
         out_dir: None,
+        front_end,
     })
 }
 

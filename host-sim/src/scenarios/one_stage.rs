@@ -38,9 +38,12 @@ use std::sync::Arc;
 use gnss_attitude::attitude::one_stage::{EstimatedAngles, FilterMode};
 use serde_json::{json, Value};
 
+use super::signal::cn0_loss_db;
 use super::{Outcome, RunContext, Scenario, Variant, Variants};
+use crate::report::progress;
+use crate::synth::quantize::Quantizer;
 use runs::{monte_carlo, sample_level, summarize, Summary, RUNS};
-use samples::{record_source, Recording};
+use samples::{record, record_source, Recording};
 use sim::{RunConfig, RunResult};
 use source::IqFastPath;
 use truth::Motion;
@@ -230,6 +233,13 @@ crate::metrics! {
         #[metric(unit = "")] pub sigma_run_spread_iq: f64,
         /// Carrier wavelength (GPS L1).
         #[metric(unit = "m")] pub wavelength_m: f64,
+        /// The front end of the sample-level path (`--front-end`): `i8` (CS8), `sm2`, `bit1`.
+        #[metric(unit = "")] pub front_end: &'static str,
+        /// C/N0 loss of the front end: the channels' C/N0 averaged over each satellite's
+        /// observations, from an `i8` recording of the same synthesized signals (same seed)
+        /// minus from this one, averaged over the satellites both delivered (null for `i8`,
+        /// the reference, and on the I/Q path).
+        #[metric(unit = "dB")] pub cn0_loss_db: Option<f64>,
         /// The sample-level path against the I/Q fast path (sample-level variants).
         #[metric(flatten)] #[serde(flatten)] pub paths: Option<PathComparison>,
         /// All three angles estimated (the paper's cases).
@@ -324,13 +334,19 @@ struct Runs {
     iq_results: Vec<Vec<RunResult>>,
     iq: Vec<Summary>,
     sampled: Option<(Arc<Recording>, Vec<RunResult>)>,
+    /// The front end's C/N0 loss against an `i8` recording of the same signals.
+    cn0_loss_db: Option<f64>,
+    front_end: Quantizer,
     /// The headline summaries (samples, or the I/Q path), per configuration.
     sums: Vec<Summary>,
     bound: f64,
 }
 
 impl Runs {
-    fn run(plan: Plan, seed: u64) -> anyhow::Result<Self> {
+    fn run(plan: Plan, seed: u64, front_end: Quantizer) -> anyhow::Result<Self> {
+        if plan.iq_only && front_end != Quantizer::I8 {
+            anyhow::bail!("the -iq variants have no samples: --front-end {front_end} needs a sample-level variant");
+        }
         let configs = plan.case.configurations();
         let bound = configs[0].bound_arcmin();
         let iq_results = monte_carlo(&configs, seed, "one-stage: I/Q fast path")?;
@@ -338,7 +354,16 @@ impl Runs {
         let sampled = if plan.iq_only {
             None
         } else {
-            Some(sample_level(&configs, seed)?)
+            Some(sample_level(&configs, seed, front_end)?)
+        };
+        let cn0_loss_db = match &sampled {
+            Some((rec, _)) if front_end != Quantizer::I8 => {
+                let bar = progress(1, "one-stage: the i8 reference recording");
+                let reference = record(&configs[0], seed, Quantizer::I8)?;
+                bar.finish_and_clear();
+                cn0_loss_db(&reference.cn0_by_satellite(), &rec.cn0_by_satellite())
+            }
+            _ => None,
         };
         let sums = match &sampled {
             Some((_, res)) => res
@@ -352,6 +377,8 @@ impl Runs {
             iq_results,
             iq,
             sampled,
+            cn0_loss_db,
+            front_end,
             sums,
             bound,
         })
@@ -403,6 +430,8 @@ impl Runs {
             runs_iq: RUNS,
             sigma_run_spread_iq: self.spread(),
             wavelength_m: truth::WAVELENGTH_M,
+            front_end: self.front_end.name(),
+            cn0_loss_db: self.cn0_loss_db,
             paths,
             three_axis,
             line_bias: (case == Case::LineBias)
@@ -425,7 +454,7 @@ impl Runs {
                 if plan.iq_only {
                     format!("I/Q fast path, {RUNS} runs")
                 } else {
-                    "samples (2.6 Msps CS8 → core acquisition, correlators, tracking, adapter), one run".into()
+                    format!("samples (2.6 Msps, front end {} → core acquisition, correlators, tracking, adapter), one run", self.front_end)
                 }
             ),
             format!(
@@ -473,8 +502,14 @@ impl Runs {
 }
 
 fn run(plan: Plan, ctx: &RunContext) -> anyhow::Result<Outcome> {
-    let runs = Runs::run(plan, ctx.seed)?;
+    let runs = Runs::run(plan, ctx.seed, ctx.front_end)?;
     let mut summary = runs.summary(plan);
+    if let Some(loss) = runs.cn0_loss_db {
+        summary.push(format!(
+            "front end {}: C/N0 loss against CS8 on the same signals {loss:.2} dB",
+            ctx.front_end
+        ));
+    }
     let paths = match &runs.sampled {
         Some((rec, _)) => Some(compare_paths(
             &mut summary,

@@ -19,6 +19,7 @@
 //! difference for two independent prompts at SNR = (C/N0)·T, computed exactly from the phase
 //! density of a noisy phasor, not the high-SNR approximation).
 
+use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
 use anyhow::Result;
@@ -32,10 +33,11 @@ use serde_json::json;
 use super::{Outcome, RunContext, Scenario, Variant, Variants};
 use crate::arrays::triangle;
 use crate::chain::{self, ChainOutput, ChainParams};
+use crate::open_loop::{open_loop_losses, OpenLoopLosses, OPEN_LOOP_EPOCHS};
 use crate::report::{plot_panels, progress, write_csv, Panel, Series};
 use crate::stats::phase_difference_rms_cycles;
 use crate::synth::file::{read_streams, write_streams};
-use crate::synth::quantize::encode;
+use crate::synth::quantize::{encode, Quantizer};
 use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 
 /// The scenario.
@@ -105,11 +107,12 @@ pub fn scene(cn0_dbhz: f64, seed: u64) -> Scene {
     }
 }
 
-/// The chain set-up of the scenario.
+/// The chain set-up of the scenario (CS8 front end; set `quantizer` for another).
 pub fn params(cn0_dbhz: f64, seed: u64, duration_s: f64) -> ChainParams {
     ChainParams {
         scene: scene(cn0_dbhz, seed),
         format: SampleFormat::Cs8,
+        quantizer: Quantizer::I8,
         acquisition: AcquisitionConfig {
             sample_rate_hz: SAMPLE_RATE_HZ,
             intermediate_frequency_hz: 0.0,
@@ -155,6 +158,17 @@ crate::metrics! {
         #[metric(unit = "cycle")] pub phase_diff_err_rms_cycles: f64,
         /// Theoretical RMS of that difference for two independent prompts (thermal noise).
         #[metric(unit = "cycle")] pub phase_diff_bound_cycles: f64,
+        /// The front end the samples went through (`--front-end`): `i8` (CS8), `sm2`, `bit1`.
+        #[metric(unit = "")] pub front_end: &'static str,
+        /// The tracking channels' C/N0 estimates averaged over the locked epochs from 2 s on,
+        /// then over the satellites.
+        #[metric(unit = "dB-Hz")] pub cn0_mean_dbhz: f64,
+        /// C/N0 loss of the front end: the `i8` run's `cn0_mean_dbhz` on the same synthesized
+        /// signals (same seed) minus this run's, over the satellites both tracked (null for
+        /// `i8`, the reference).
+        #[metric(unit = "dB")] pub cn0_loss_db: Option<f64>,
+        /// The open-loop correlator experiment on this front end's samples (`sm2`, `bit1`).
+        #[metric(flatten)] #[serde(flatten)] pub open_loop: Option<OpenLoopLosses>,
     }
 }
 
@@ -196,7 +210,58 @@ fn interference(cn0: f64, satellites: usize) -> (f64, f64) {
     (interference, 10.0 * (1.0 + interference).log10())
 }
 
-fn metrics(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Metrics {
+/// Each tracked satellite's C/N0 estimates averaged over its locked epochs from
+/// [`SETTLED_S`] on, dB-Hz, by PRN (satellites never locked there are left out).
+pub fn cn0_after_lock(out: &ChainOutput) -> BTreeMap<u8, f64> {
+    out.tracked
+        .iter()
+        .filter_map(|t| {
+            let v: Vec<f64> = t
+                .epochs
+                .iter()
+                .filter(|e| e.locked && e.t >= SETTLED_S)
+                .map(|e| e.cn0_dbhz)
+                .collect();
+            (!v.is_empty()).then(|| {
+                (
+                    t.acquisition.prn.number(),
+                    v.iter().sum::<f64>() / v.len() as f64,
+                )
+            })
+        })
+        .collect()
+}
+
+/// The mean over the satellites of [`cn0_after_lock`], dB-Hz (NaN without one).
+pub fn mean_cn0(per_prn: &BTreeMap<u8, f64>) -> f64 {
+    per_prn.values().sum::<f64>() / per_prn.len() as f64
+}
+
+/// C/N0 loss of a front end against the reference: the mean over the satellites both
+/// tracked of reference minus front end, dB (`None` without a common satellite).
+pub fn cn0_loss_db(reference: &BTreeMap<u8, f64>, front_end: &BTreeMap<u8, f64>) -> Option<f64> {
+    let d: Vec<f64> = reference
+        .iter()
+        .filter_map(|(prn, r)| front_end.get(prn).map(|f| r - f))
+        .collect();
+    (!d.is_empty()).then(|| d.iter().sum::<f64>() / d.len() as f64)
+}
+
+/// What the front end changes: its name, its C/N0 against the `i8` run, the open-loop losses.
+struct FrontEndFigures {
+    name: &'static str,
+    cn0_mean: f64,
+    cn0_loss: Option<f64>,
+    open_loop: Option<OpenLoopLosses>,
+}
+
+fn metrics(
+    out: &ChainOutput,
+    sc: &Scene,
+    cn0: f64,
+    stats: &[SatStats],
+    fe: FrontEndFigures,
+) -> Metrics {
     let prn_chips_ok = (1..=PRN_COUNT)
         .filter(|&n| {
             Prn::new(n)
@@ -230,6 +295,10 @@ fn metrics(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Metri
             f64::NAN
         },
         phase_diff_bound_cycles: phase_difference_rms_cycles(cn0, PROMPT_S),
+        front_end: fe.name,
+        cn0_mean_dbhz: fe.cn0_mean,
+        cn0_loss_db: fe.cn0_loss,
+        open_loop: fe.open_loop,
     }
 }
 
@@ -243,7 +312,7 @@ fn summary(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Vec<S
         .fold(0.0, f64::max);
     let mut lines = vec![
         format!(
-            "{} satellites at {cn0} dB-Hz, CS8 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
+            "{} satellites at {cn0} dB-Hz, 2.6 Msps, 3 antennas; wall time: acquisition of 32 PRNs {:.1} s, synthesis of {DURATION_S} s of samples {:.1} s, tracking {:.1} s",
             sc.satellites.len(),
             out.acquisition_seconds,
             out.synthesis_seconds,
@@ -271,14 +340,52 @@ fn summary(out: &ChainOutput, sc: &Scene, cn0: f64, stats: &[SatStats]) -> Vec<S
     lines
 }
 
+/// The front end's figures: for `sm2` and `bit1` the same scene through the `i8` front end
+/// (the C/N0 reference) and the open-loop experiment.
+fn front_end_figures(
+    params: &ChainParams,
+    out: &ChainOutput,
+    cn0: f64,
+    seed: u64,
+) -> Result<FrontEndFigures> {
+    let own = cn0_after_lock(out);
+    let mut fe = FrontEndFigures {
+        name: params.quantizer.name(),
+        cn0_mean: mean_cn0(&own),
+        cn0_loss: None,
+        open_loop: None,
+    };
+    if params.quantizer != Quantizer::I8 {
+        let reference = ChainParams {
+            quantizer: Quantizer::I8,
+            ..params.clone()
+        };
+        let bar = progress(1000, "signal chain, i8 reference");
+        let out_i8 = chain::run(&reference, Some(&bar))?;
+        bar.finish_and_clear();
+        fe.cn0_loss = cn0_loss_db(&cn0_after_lock(&out_i8), &own);
+        fe.open_loop = Some(open_loop_losses(
+            params.quantizer,
+            cn0,
+            seed,
+            OPEN_LOOP_EPOCHS,
+        )?);
+    }
+    Ok(fe)
+}
+
 fn run(cn0: f64, ctx: &RunContext) -> Result<Outcome> {
-    let params = params(cn0, ctx.seed, DURATION_S);
+    let params = ChainParams {
+        quantizer: ctx.front_end,
+        ..params(cn0, ctx.seed, DURATION_S)
+    };
     let bar = progress(1000, "signal chain");
     let out = chain::run(&params, Some(&bar))?;
     bar.finish_and_clear();
     let sc = &params.scene;
     let stats = satellite_stats(&out, sc, cn0);
-    let mut o = Outcome::new(&metrics(&out, sc, cn0, &stats))?;
+    let fe = front_end_figures(&params, &out, cn0, ctx.seed)?;
+    let mut o = Outcome::new(&metrics(&out, sc, cn0, &stats, fe))?;
     o.paper = json!({
         "note": "no paper figure for this chain; the issue's acceptance targets",
         "prn_chips_ok": 32, "acq_missed": 0, "acq_false": 0,
@@ -286,10 +393,29 @@ fn run(cn0: f64, ctx: &RunContext) -> Result<Outcome> {
         "cn0_err_db_max": 1.5, "phase_diff_err_rms_cycles": "≈ phase_diff_bound_cycles",
     });
     o.summary = summary(&out, sc, cn0, &stats);
+    o.summary.push(front_end_line(&o, params.quantizer));
     if let Some(dir) = &ctx.out_dir {
         write_files(dir, &params, &out, &mut o, cn0)?;
     }
     Ok(o)
+}
+
+/// The summary line of the front end: its name, C/N0 and losses.
+fn front_end_line(o: &Outcome, q: Quantizer) -> String {
+    let num = |k: &str| o.metrics.get(k).and_then(serde_json::Value::as_f64);
+    let mut line = format!(
+        "front end {q}: C/N0 after lock {:.2} dB-Hz (mean over satellites)",
+        num("cn0_mean_dbhz").unwrap_or(f64::NAN)
+    );
+    if let Some(loss) = num("cn0_loss_db") {
+        line.push_str(&format!(
+            "; loss against CS8 on the same signals: tracking {loss:.2} dB; open loop: samples {:.2} dB, bit-parallel carrier 2-level {:.2} dB, 3-level {:.2} dB",
+            num("open_loop_sample_loss_db").unwrap_or(f64::NAN),
+            num("open_loop_carrier_loss_db_2level").unwrap_or(f64::NAN),
+            num("open_loop_carrier_loss_db_3level").unwrap_or(f64::NAN),
+        ));
+    }
+    line
 }
 
 struct SatStats {

@@ -7,8 +7,13 @@
 //! * 2-bit sign/magnitude: sign, and magnitude bit set when `|x| > T`, `T` =
 //!   [`TWO_BIT_THRESHOLD`] σ (near the optimum for the `±1, ±3` levels: 0.55 dB loss).
 //! * 1-bit: sign (1.96 dB loss).
+//!
+//! [`Quantizer`] is the front end of the sample-level scenarios (`host-sim run --front-end`):
+//! the CS8 layout above, or the 2-bit / 1-bit quantizers handed to the receiver as the `i8`
+//! values its correlator takes ([`Quantizer::quantize`]).
 
 use anyhow::{bail, Result};
+use gnss_attitude::signal::samples::sign_magnitude;
 use gnss_attitude::signal::SampleFormat;
 
 use super::scene::AnalogSamples;
@@ -30,6 +35,100 @@ fn two_bit(x: f32) -> u8 {
     let sign = u8::from(x < 0.0);
     let mag = u8::from(x.abs() > TWO_BIT_THRESHOLD);
     (sign << 1) | mag
+}
+
+/// Level of a 2-bit sample handed to the `i8` correlator, LSB per unit level (`±1, ±3` become
+/// `±8, ±24`: RMS 15.0 LSB at the 1σ threshold, next to CS8's 16 LSB per σ).
+pub const SM2_LSB_PER_LEVEL: i8 = 8;
+/// Level of a 1-bit sample handed to the `i8` correlator, LSB (`±1` becomes `±16`: RMS 16 LSB,
+/// CS8's σ).
+pub const BIT1_LSB_PER_LEVEL: i8 = 16;
+
+/// The front end's quantizer on the sample-level paths (`--front-end`): what the receiver's
+/// ADC delivers from the same analog samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Quantizer {
+    /// Complex 8-bit (CS8, [`CS8_GAIN`] LSB per σ): the default, today's figures.
+    #[default]
+    I8,
+    /// Complex 2-bit sign/magnitude (levels `±1, ±3`, threshold [`TWO_BIT_THRESHOLD`] σ), as a
+    /// MAX2769 / NT1065 delivers; handed to the correlator as `±8, ±24`.
+    Sm2,
+    /// Complex 1-bit (sign, `±1`); handed to the correlator as `±16`.
+    Bit1,
+}
+
+impl Quantizer {
+    /// Every quantizer, the reference (`i8`) first.
+    pub const ALL: [Self; 3] = [Self::I8, Self::Sm2, Self::Bit1];
+
+    /// The name on the command line and in the JSON (`i8`, `sm2`, `bit1`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::I8 => "i8",
+            Self::Sm2 => "sm2",
+            Self::Bit1 => "bit1",
+        }
+    }
+
+    /// The quantizer called `name`.
+    ///
+    /// # Errors
+    /// An unknown name.
+    pub fn parse(name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|q| q.name() == name)
+            .ok_or_else(|| anyhow::anyhow!("no front end {name:?}; front ends: i8, sm2, bit1"))
+    }
+
+    /// The sample value the correlator receives for analog `x` (noise σ = 1) from a 2- or
+    /// 1-bit quantizer (`None` for [`Quantizer::I8`], which goes through the CS8 layout).
+    pub fn level(self, x: f32) -> Option<i8> {
+        match self {
+            Self::I8 => None,
+            Self::Sm2 => Some(sign_magnitude(two_bit(x)) * SM2_LSB_PER_LEVEL),
+            Self::Bit1 => Some(if x < 0.0 {
+                -BIT1_LSB_PER_LEVEL
+            } else {
+                BIT1_LSB_PER_LEVEL
+            }),
+        }
+    }
+
+    /// The antennas' analog samples as the receiver's correlators take them: through `format`
+    /// (encoded and decoded by the core) for [`Quantizer::I8`], else quantized sample by
+    /// sample ([`Quantizer::level`]; complex samples need complex analog samples).
+    ///
+    /// # Errors
+    /// As [`encode`] and [`decode`] for `i8`.
+    pub fn quantize(
+        self,
+        format: SampleFormat,
+        analog: &[AnalogSamples],
+        n: usize,
+    ) -> Result<Planar> {
+        if self == Self::I8 {
+            let streams = encode(format, analog)?;
+            return decode(format, &streams, analog.len(), n);
+        }
+        let map = |v: &[f32]| -> Vec<i8> {
+            v.iter()
+                .take(n)
+                .map(|&x| self.level(x).unwrap_or(0))
+                .collect()
+        };
+        Ok(Planar {
+            i: analog.iter().map(|a| map(&a.i)).collect(),
+            q: analog.iter().map(|a| map(&a.q)).collect(),
+        })
+    }
+}
+
+impl std::fmt::Display for Quantizer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// Encodes the antennas' samples into `format`: one byte stream per antenna, or a single

@@ -32,6 +32,7 @@ use super::fast_path::EPOCH_S;
 use super::world::{World, MASK_RAD};
 use crate::chain::{samples, ChainParams, ANTENNAS};
 use crate::synth::quantize::Planar;
+use crate::synth::quantize::Quantizer;
 use crate::synth::scene::{mix, L1_WAVELENGTH};
 use crate::synth::{AttitudeMotion, CarrierStep, FrontEnd, Satellite, SatelliteTrack, Scene};
 
@@ -245,6 +246,7 @@ pub fn chain_params(
     ChainParams {
         scene,
         format: SampleFormat::Cs8,
+        quantizer: Quantizer::I8,
         acquisition: front.acquisition,
         search_prns: Vec::new(),
         channel: front.channel,

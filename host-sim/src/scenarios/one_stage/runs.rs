@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::samples::{record, Recording, Replay};
 use super::sim::{simulate, simulate_with, InputPath, RunConfig, RunResult};
 use crate::report::progress;
+use crate::synth::quantize::Quantizer;
 
 /// Monte Carlo runs per filter form on the I/Q fast path.
 pub const RUNS: usize = 8;
@@ -93,18 +94,19 @@ pub fn monte_carlo(
     Ok(by_config)
 }
 
-/// One sample-level recording with `seed` (the truth of `configs[0]`; every configuration
-/// must share its sky, C/N0, motion and line biases), replayed through every configuration's
-/// filter in parallel.
+/// One sample-level recording with `seed` through the front end `quantizer` (the truth of
+/// `configs[0]`; every configuration must share its sky, C/N0, motion and line biases),
+/// replayed through every configuration's filter in parallel.
 pub fn sample_level(
     configs: &[RunConfig],
     seed: u64,
+    quantizer: Quantizer,
 ) -> anyhow::Result<(Arc<Recording>, Vec<RunResult>)> {
     let base = configs
         .first()
         .ok_or_else(|| anyhow::anyhow!("no configuration"))?;
     let bar = progress(1, "one-stage: samples → correlators → filter");
-    let recording = Arc::new(record(base, seed)?);
+    let recording = Arc::new(record(base, seed, quantizer)?);
     bar.finish_and_clear();
     let results = configs
         .par_iter()

@@ -28,6 +28,7 @@ use super::sim::RunConfig;
 use super::source::{EpochSource, EPOCH_S};
 use super::truth::{antennas, rotation_about_y, sky_g1, Motion};
 use crate::chain::{ChainParams, Tracker};
+use crate::synth::quantize::Quantizer;
 use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 
 /// Sample rate, Hz (the `signal` scenario's).
@@ -44,8 +45,14 @@ fn motion_a_scene(t: f64) -> Matrix3<f64> {
     rotation_about_y(Motion::MotionA.beta(t - WARM_UP_S))
 }
 
-/// The chain set-up of a run: scene from the run's sky, C/N0, motion and line biases.
+/// The chain set-up of a run: scene from the run's sky, C/N0, motion and line biases; CS8
+/// front end.
 pub fn chain_params(cfg: &RunConfig, seed: u64) -> ChainParams {
+    chain_params_with(cfg, seed, Quantizer::I8)
+}
+
+/// [`chain_params`] with the front end `quantizer` (the same synthesized signals).
+pub fn chain_params_with(cfg: &RunConfig, seed: u64, quantizer: Quantizer) -> ChainParams {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5a3d_1e5e_7a11);
     let sky = sky_g1(cfg.satellites);
     let satellites = sky
@@ -86,6 +93,7 @@ pub fn chain_params(cfg: &RunConfig, seed: u64) -> ChainParams {
     ChainParams {
         scene,
         format: SampleFormat::Cs8,
+        quantizer,
         acquisition: AcquisitionConfig {
             sample_rate_hz: SAMPLE_RATE_HZ,
             intermediate_frequency_hz: 0.0,
@@ -143,9 +151,10 @@ pub struct SampleLevel {
 }
 
 impl SampleLevel {
-    /// Acquires the scene of `cfg` drawn with `seed` and starts its channels.
-    pub fn new(cfg: &RunConfig, seed: u64) -> Result<Self> {
-        let params = chain_params(cfg, seed);
+    /// Acquires the scene of `cfg` drawn with `seed` through the front end `quantizer` and
+    /// starts its channels.
+    pub fn new(cfg: &RunConfig, seed: u64, quantizer: Quantizer) -> Result<Self> {
+        let params = chain_params_with(cfg, seed, quantizer);
         let tracker = Tracker::acquire(&params)?;
         let los = tracker
             .channels
@@ -259,10 +268,11 @@ pub struct Recording {
     pub wall_s: f64,
 }
 
-/// Runs the sample-level path of `cfg` for its duration and records the observations.
-pub fn record(cfg: &RunConfig, seed: u64) -> Result<Recording> {
+/// Runs the sample-level path of `cfg` for its duration through the front end `quantizer`
+/// and records the observations.
+pub fn record(cfg: &RunConfig, seed: u64, quantizer: Quantizer) -> Result<Recording> {
     let started = std::time::Instant::now();
-    let mut source = SampleLevel::new(cfg, seed)?;
+    let mut source = SampleLevel::new(cfg, seed, quantizer)?;
     let epochs = record_source(cfg, &mut source)?;
     Ok(Recording {
         epochs,
@@ -286,6 +296,22 @@ pub fn record_source(
         epochs.push(obs.clone());
     }
     Ok(epochs)
+}
+
+impl Recording {
+    /// Each satellite's (observation `id`'s) C/N0 averaged over the recorded observations
+    /// (the adapter passes locked channels only), dB-Hz.
+    pub fn cn0_by_satellite(&self) -> BTreeMap<u8, f64> {
+        let mut sums: BTreeMap<u8, (f64, usize)> = BTreeMap::new();
+        for o in self.epochs.iter().flatten() {
+            let e = sums.entry(o.id).or_default();
+            e.0 += f64::from(o.cn0_dbhz);
+            e.1 += 1;
+        }
+        sums.into_iter()
+            .map(|(id, (s, n))| (id, s / n as f64))
+            .collect()
+    }
 }
 
 /// Plays a [`Recording`] back (the truth passed in is not used: it was the recording's).

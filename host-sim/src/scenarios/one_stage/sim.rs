@@ -14,6 +14,7 @@ use super::bound::{information_rate, information_rate_three_angles, loop_bound_a
 use super::samples::SampleLevel;
 use super::source::{EpochSource, IqFastPath, EPOCH_S};
 use super::truth::{rotation_about_y, sky_g1, Motion, SIDE_M, WAVELENGTH_M};
+use crate::synth::quantize::Quantizer;
 
 /// Prior standard deviation of the rates, rad/s (the paper's β is static; a snapshot solver
 /// reports no rate).
@@ -192,7 +193,7 @@ pub fn simulate(cfg: &RunConfig, seed: u64) -> anyhow::Result<RunResult> {
     let sky = sky_g1(cfg.satellites);
     let source: Box<dyn EpochSource> = match cfg.input {
         InputPath::IqFastPath => Box::new(IqFastPath::new(&sky, cfg.cn0_dbhz, cfg.line_bias, seed)),
-        InputPath::SampleLevel => Box::new(SampleLevel::new(cfg, seed)?),
+        InputPath::SampleLevel => Box::new(SampleLevel::new(cfg, seed, Quantizer::I8)?),
     };
     simulate_with(cfg, source)
 }
