@@ -211,7 +211,7 @@ fn interference(cn0: f64, satellites: usize) -> (f64, f64) {
 }
 
 /// Each tracked satellite's C/N0 estimates averaged over its locked epochs from
-/// [`SETTLED_S`] on, dB-Hz, by PRN (satellites never locked there are left out).
+/// `SETTLED_S` (2 s) on, dB-Hz, by PRN (satellites never locked there are left out).
 pub fn cn0_after_lock(out: &ChainOutput) -> BTreeMap<u8, f64> {
     out.tracked
         .iter()
