@@ -6,9 +6,10 @@
 //! host-sim run <scenario> [--variant V] [--seed N] [--json] [--out DIR] [--front-end i8|sm2|bit1]
 //! host-sim acquire --file F --format FMT --fs HZ [--if HZ] [--doppler-max HZ] [--json]
 //! host-sim track --file F [--file F2 --file F3] --format FMT --fs HZ [--seconds S]
-//!                [--baselines ... --sky CSV] [--json] [--out DIR]
+//!                [--baselines ... [--sky CSV]] [--nav RINEX] [--json] [--out DIR]
 //! host-sim synth --out DIR --format FMT --fs HZ --seconds S [--antennas 3] [--leo]
 //!                [--no-noise] [--cn0 C1,C2,...] [--cw HZ,DB] [--dc I,Q] [--constant I,Q]
+//!                [--lnav] [--gps-start WEEK:TOW] [--position LAT,LON,H]
 //! host-sim acquisition-stats [--searches 200] [--markdown docs/ACQUISITION.md]
 //! host-sim report [--quick] [--out docs/RESULTS.md]
 //! ```
@@ -132,7 +133,8 @@ struct TrackArgs {
     /// Baselines of antennas 1 and 2 from antenna 0, body frame, m: 'x1,y1,z1;x2,y2,z2'.
     #[arg(long)]
     baselines: Option<String>,
-    /// Sky file (lines 'prn,azimuth_deg,elevation_deg'; NED reference frame).
+    /// Sky file (lines 'prn,azimuth_deg,elevation_deg'; NED reference frame); without it the
+    /// lines of sight come from the decoded navigation message and the position fixes.
     #[arg(long)]
     sky: Option<PathBuf>,
     /// Line biases of antennas 1 and 2 relative to antenna 0, cycles: 'b1,b2' (a bench
@@ -145,9 +147,14 @@ struct TrackArgs {
     /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
     json: bool,
-    /// Directory for CSV rows and PNG plots.
+    /// Directory for CSV rows and PNG plots (and the navigation's `track_position.csv` and
+    /// `track_nav.rnx`).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// A RINEX 2/3 GPS navigation file: ephemerides (and ionosphere) for the satellites not
+    /// decoded yet.
+    #[arg(long)]
+    nav: Option<PathBuf>,
 }
 
 /// `host-sim synth`.
@@ -207,6 +214,17 @@ struct SynthArgs {
     /// Seed of the sky, data and noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Carry the LNAV navigation message and the true geometry of a static receiver (the
+    /// bundled almanac's satellites in view) instead of the random sky and data.
+    #[arg(long)]
+    lnav: bool,
+    /// GPS time of the first sample, 'WEEK:TOW' (implies --lnav; default 2195:237003.3).
+    #[arg(long)]
+    gps_start: Option<String>,
+    /// Receiver position 'LAT,LON,H' (degrees, degrees, metres; implies --lnav; default
+    /// 48.1374,11.5755,520).
+    #[arg(long, allow_negative_numbers = true)]
+    position: Option<String>,
 }
 
 /// A recording on the command line.
@@ -363,7 +381,20 @@ fn track_command(args: TrackArgs) -> anyhow::Result<()> {
         attitude_window,
         json,
         out,
+        nav,
     } = args;
+    let nav_file = nav
+        .map(|p| {
+            let text = limits::read_text_capped(
+                &p,
+                limits::MAX_NAV_FILE_BYTES,
+                limits::MAX_NAV_LINE_CHARS,
+                "navigation file",
+            )?;
+            record::rinex::parse_rinex_nav(&text)
+                .with_context(|| format!("navigation file {}", p.display()))
+        })
+        .transpose()?;
     let attitude = attitude_setup(
         baselines.as_deref(),
         sky.as_deref(),
@@ -375,6 +406,7 @@ fn track_command(args: TrackArgs) -> anyhow::Result<()> {
         seconds,
         reacquire: !no_reacquire,
         attitude,
+        nav_file,
         ..record::TrackOptions::default()
     };
     track(&file, &opts, json, out.as_deref())
@@ -400,7 +432,11 @@ fn synth_command(args: SynthArgs) -> anyhow::Result<()> {
         cn0_min,
         cn0_max,
         seed,
+        lnav,
+        gps_start,
+        position,
     } = args;
+    let lnav = lnav_spec(lnav, gps_start.as_deref(), position.as_deref())?;
     let overlays = overlays(cw, dc, constant)?;
     let cn0 = cn0.unwrap_or_default();
     let satellites = satellites.map_or(if cn0.is_empty() { 8 } else { cn0.len() }, usize::from);
@@ -418,8 +454,43 @@ fn synth_command(args: SynthArgs) -> anyhow::Result<()> {
         noise: !no_noise,
         cn0_dbhz: cn0,
         overlays,
+        lnav,
     };
     synth(&out, &name, &spec)
+}
+
+/// `--lnav`, `--gps-start WEEK:TOW`, `--position LAT,LON,H`.
+fn lnav_spec(
+    lnav: bool,
+    gps_start: Option<&str>,
+    position: Option<&str>,
+) -> anyhow::Result<Option<record::synth_nav::LnavSpec>> {
+    if !lnav && gps_start.is_none() && position.is_none() {
+        return Ok(None);
+    }
+    let mut spec = record::synth_nav::LnavSpec::default();
+    if let Some(text) = gps_start {
+        let parsed = text
+            .split_once(':')
+            .and_then(|(w, t)| Some((w.trim().parse::<u16>().ok()?, t.trim().parse::<f64>().ok()?)));
+        let (week, tow) = parsed
+            .with_context(|| format!("--gps-start {text:?}: expected WEEK:TOW, e.g. 2195:237003.3"))?;
+        spec.week = week;
+        spec.tow_s = tow;
+    }
+    if let Some(text) = position {
+        let v: Vec<f64> = text
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("--position {text:?}: expected LAT,LON,H"))?;
+        anyhow::ensure!(
+            v.len() == 3 && v.iter().all(|x| x.is_finite()),
+            "--position {text:?}: three finite numbers LAT,LON,H (degrees, degrees, metres)"
+        );
+        spec.position_llh = [v[0], v[1], v[2]];
+    }
+    Ok(Some(spec))
 }
 
 fn parse_front_end(s: &str) -> Result<Quantizer, String> {
@@ -564,13 +635,19 @@ fn attitude_setup(
         );
         return Ok(None);
     };
-    let sky = sky.context("--baselines needs --sky (the lines of sight)")?;
-    let text = limits::read_text_capped(
-        sky,
-        limits::MAX_SKY_FILE_BYTES,
-        limits::MAX_SKY_LINE_CHARS,
-        "sky file",
-    )?;
+    let sky = sky
+        .map(|sky| -> anyhow::Result<_> {
+            let text = limits::read_text_capped(
+                sky,
+                limits::MAX_SKY_FILE_BYTES,
+                limits::MAX_SKY_LINE_CHARS,
+                "sky file",
+            )?;
+            record::attitude::parse_sky(&text)
+                .with_context(|| format!("sky file {}", sky.display()))
+        })
+        .transpose()?
+        .unwrap_or_default();
     let bias = line_bias
         .map(|b| {
             anyhow::ensure!(
@@ -583,8 +660,7 @@ fn attitude_setup(
     Ok(Some(record::attitude::AttitudeSetup {
         baselines_body_m: record::attitude::parse_baselines(baselines)?,
         line_bias_cycles: bias,
-        sky: record::attitude::parse_sky(&text)
-            .with_context(|| format!("sky file {}", sky.display()))?,
+        sky,
         window_s,
     }))
 }

@@ -111,6 +111,12 @@ impl PhaseAccumulator {
         self.current.cn0_dbhz = f64::from(e.cn0_dbhz);
     }
 
+    /// Sets the line of sight (unit vector, NED) the next windows use (`None`: unknown,
+    /// the satellite is left out).
+    pub fn set_los(&mut self, los: Option<Vector3<f64>>) {
+        self.los = los;
+    }
+
     fn close(&mut self) {
         let mut w = self.current;
         if w.n > 0 {
@@ -236,7 +242,13 @@ impl AttitudeSolver {
         })
     }
 
-    /// The accumulator of satellite `prn` (its line of sight from the sky file, NED).
+    /// Whether the lines of sight come from the navigation fixes (no sky file).
+    pub fn uses_navigation(&self) -> bool {
+        self.setup.sky.is_empty()
+    }
+
+    /// The accumulator of satellite `prn` (its line of sight from the sky file, NED; none
+    /// yet without a sky file).
     pub fn accumulator(&self, prn: u8) -> PhaseAccumulator {
         let los = self
             .setup
@@ -263,6 +275,11 @@ impl AttitudeSolver {
             code_sum: [0.0; 2],
             done: Vec::new(),
         }
+    }
+
+    /// The window length, s.
+    pub fn window_s(&self) -> f64 {
+        self.setup.window_s
     }
 
     /// End of window `k`, s.
@@ -325,7 +342,7 @@ impl AttitudeSolver {
         out.satellites.sort_unstable();
         if rows.len() < 4 {
             out.refused = Some(format!(
-                "{} satellites locked through the window and in the sky file (4 needed)",
+                "{} satellites locked through the window with a line of sight (4 needed)",
                 rows.len()
             ));
             return Ok(out);

@@ -11,7 +11,8 @@ pub struct AttitudeSetup {
     /// Line biases of antennas 1 and 2 relative to antenna 0, cycles (`None`: unknown, the
     /// resolver estimates them with the integers from double differences).
     pub line_bias_cycles: Option<[f64; 2]>,
-    /// Sky: (PRN, azimuth from north towards east, elevation), degrees.
+    /// Sky: (PRN, azimuth from north towards east, elevation), degrees; empty: the lines of
+    /// sight come from `track`'s navigation fixes (time-varying).
     pub sky: Vec<(u8, f64, f64)>,
     /// Window, s.
     pub window_s: f64,

@@ -18,6 +18,7 @@
 //! | `--attitude-window` | `(0, 60]` s ([`MAX_ATTITUDE_WINDOW_S`]) |
 //! | `--cw`, `--dc`, `--constant`, `--line-bias` | finite values |
 //! | `--sky` file | at most [`MAX_SKY_FILE_BYTES`], lines of at most [`MAX_SKY_LINE_CHARS`] |
+//! | `--nav` file | at most [`MAX_NAV_FILE_BYTES`], lines of at most [`MAX_NAV_LINE_CHARS`] |
 
 use std::io::Read;
 use std::path::Path;
@@ -55,6 +56,13 @@ pub const MAX_SKY_FILE_BYTES: u64 = 64 * 1024;
 
 /// Longest line of a sky file, characters.
 pub const MAX_SKY_LINE_CHARS: usize = 256;
+
+/// Largest `--nav` RINEX navigation file read, bytes (a day of a full constellation's
+/// broadcast ephemerides is about 1 MB).
+pub const MAX_NAV_FILE_BYTES: u64 = 32 * 1024 * 1024;
+
+/// Longest line of a `--nav` file, characters (RINEX lines are 80).
+pub const MAX_NAV_LINE_CHARS: usize = 256;
 
 /// Parses a finite `f64` in `[lo, hi]` (`lo` excluded when `lo_open`), naming the range.
 fn f64_in(s: &str, lo: f64, hi: f64, lo_open: bool, unit: &str) -> Result<f64, String> {

@@ -15,6 +15,9 @@
 //!   attitude solver.
 //! * [`attitude_setup`]: `--baselines`, `--sky`, `--line-bias`.
 //! * [`synthesize`]: synthesized recordings with their truth.
+//! * [`synth_nav`]: the LNAV sky of a synthesized recording (`synth --lnav`).
+//! * [`navigation`]: `track`'s navigation: LNAV decoding, pseudoranges, fixes, lines of sight.
+//! * [`rinex`]: RINEX navigation files, written (3.04) and read (2.xx, 3.xx).
 
 pub mod acquire;
 pub mod acquisition_stats;
@@ -25,6 +28,9 @@ pub mod limits;
 pub mod reader;
 pub mod report;
 pub mod satellite;
+pub mod navigation;
+pub mod rinex;
+pub mod synth_nav;
 pub mod synthesize;
 pub mod track;
 

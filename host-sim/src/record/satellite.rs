@@ -7,6 +7,7 @@ use gnss_attitude::tracking::{ChannelState, SearchResult, TrackingEpoch};
 use serde::Serialize;
 
 use super::attitude::PhaseAccumulator;
+use super::navigation::NavChannel;
 use super::track::{PULL_IN_ALLOWANCE_S, REACQUIRE_AFTER_S, ROW_INTERVAL_S};
 
 /// One 100 ms row of a satellite.
@@ -106,6 +107,8 @@ pub struct SatTrack {
     first_release: Option<f64>,
     /// Phase and code sums of the attitude windows.
     pub phases: Option<PhaseAccumulator>,
+    /// The channel's navigation decoder and measurements.
+    pub nav: Option<NavChannel>,
 }
 
 impl SatTrack {
@@ -136,6 +139,7 @@ impl SatTrack {
             cross_correlation_releases: 0,
             first_release: None,
             phases,
+            nav: None,
         }
     }
 
@@ -215,6 +219,9 @@ impl SatTrack {
         }
         if let Some(p) = self.phases.as_mut() {
             p.add(e, t, locked);
+        }
+        if let Some(n) = self.nav.as_mut() {
+            n.epoch(e, locked);
         }
         self.last_t = t + 0.5 * dt;
     }

@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::format::{interleave, FileFormat};
 use super::reader::{Recording, RecordingSpec};
+use super::synth_nav::{lnav_satellites, LnavSpec, NavigationTruth};
 use crate::arrays::triangle;
 use crate::synth::file::extension;
 use crate::synth::quantize::encode;
@@ -74,6 +75,9 @@ pub struct SynthSpec {
     /// Interference and degenerate inputs applied to every antenna before quantization, in
     /// order.
     pub overlays: Vec<Overlay>,
+    /// The LNAV message and the geometry of a receiver at a place and time (`synth --lnav`,
+    /// static only): the almanac's satellites in view instead of the random sky.
+    pub lnav: Option<LnavSpec>,
 }
 
 /// Something added to, or put instead of, the synthesized signals before quantization (noise
@@ -160,6 +164,7 @@ impl Default for SynthSpec {
             noise: true,
             cn0_dbhz: Vec::new(),
             overlays: Vec::new(),
+            lnav: None,
         }
     }
 }
@@ -222,6 +227,11 @@ pub struct RecordingTruth {
     /// Interference and degenerate inputs applied (a constant input leaves no satellites).
     #[serde(default)]
     pub overlays: Vec<Overlay>,
+    /// GPS time of the first sample, receiver position and the broadcast ephemerides
+    /// (recordings with `--lnav`): `gps_week`, `tow_s`, `position_ecef_m`, `position_llh`,
+    /// `ephemerides`.
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub navigation: Option<NavigationTruth>,
 }
 
 fn noise_default() -> bool {
@@ -240,6 +250,17 @@ pub const LINE_BIAS_CYCLES: [f64; 3] = [0.0, 0.13, -0.27];
 /// An antenna count other than 1 or 3, a satellite count outside 1–12, a C/N0 range that is
 /// not finite or reversed.
 pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
+    scene_with_navigation(spec).map(|(scene, truth, _)| (scene, truth))
+}
+
+/// [`scene`] and, with [`SynthSpec::lnav`], the navigation truth.
+///
+/// # Errors
+/// As [`scene`]; with `lnav`, LEO dynamics, a position or time out of range, fewer than
+/// four satellites in view.
+pub fn scene_with_navigation(
+    spec: &SynthSpec,
+) -> Result<(Scene, Vec<SatelliteTruth>, Option<NavigationTruth>)> {
     ensure!(
         spec.antennas == 1 || spec.antennas == 3,
         "synthesized recordings have 1 or 3 antennas"
@@ -293,6 +314,42 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
     if !spec.cn0_dbhz.is_empty() {
         cn0.clone_from(&spec.cn0_dbhz);
     }
+    let [yaw, pitch, roll] = ATTITUDE_YPR_DEG.map(f64::to_radians);
+    let c_rb = Rotation3::from_euler_angles(roll, pitch, yaw).into_inner();
+    let (antennas_b, bias) = if spec.antennas == 3 {
+        (triangle(1.5), LINE_BIAS_CYCLES.to_vec())
+    } else {
+        (vec![Vector3::zeros()], vec![0.0])
+    };
+    if let Some(lnav) = &spec.lnav {
+        ensure!(
+            spec.dynamics == Dynamics::Static,
+            "--lnav recordings are static (a ground receiver)"
+        );
+        let (sky, nav) = lnav_satellites(lnav, spec.seconds, n, &cn0, &antennas_b, &c_rb, || {
+            rng.random_range(0.0..1.0)
+        })?;
+        let truth = sky
+            .iter()
+            .map(|s| SatelliteTruth {
+                prn: s.satellite.prn,
+                cn0_dbhz: s.satellite.cn0_dbhz,
+                doppler_hz: s.satellite.doppler_hz,
+                doppler_rate_hz_s: s.satellite.doppler_rate_hz_s,
+                code_phase_chips: s.satellite.code_phase_chips.rem_euclid(1023.0),
+                azimuth_deg: s.azimuth_deg,
+                elevation_deg: s.elevation_deg,
+            })
+            .collect();
+        let scene = build_scene(
+            spec,
+            sky.into_iter().map(|s| s.satellite).collect(),
+            antennas_b,
+            bias,
+            c_rb,
+        );
+        return Ok((scene, truth, Some(nav)));
+    }
     let az0: f64 = rng.random_range(0.0..45.0);
     let mut sats = Vec::with_capacity(n);
     for (k, &prn) in prns.iter().enumerate() {
@@ -325,31 +382,7 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
             track: None,
         });
     }
-    let complex = spec.format.is_complex();
-    let fif = spec.intermediate_frequency_hz.unwrap_or(if complex {
-        0.0
-    } else {
-        spec.sample_rate_hz / 4.0
-    });
-    let [yaw, pitch, roll] = ATTITUDE_YPR_DEG.map(f64::to_radians);
-    let c_rb = Rotation3::from_euler_angles(roll, pitch, yaw).into_inner();
-    let (antennas_b, bias) = if spec.antennas == 3 {
-        (triangle(1.5), LINE_BIAS_CYCLES.to_vec())
-    } else {
-        (vec![Vector3::zeros()], vec![0.0])
-    };
-    let scene = Scene {
-        satellites: sats,
-        antennas_b,
-        line_bias_cycles: bias,
-        attitude: AttitudeMotion::Constant(c_rb),
-        front_end: FrontEnd {
-            sample_rate_hz: spec.sample_rate_hz,
-            intermediate_frequency_hz: fif,
-            complex,
-        },
-        noise_seed: spec.noise.then_some(spec.seed ^ 0x7265_636f_7264),
-    };
+    let scene = build_scene(spec, sats, antennas_b, bias, c_rb);
     let truth = scene
         .satellites
         .iter()
@@ -368,7 +401,35 @@ pub fn scene(spec: &SynthSpec) -> Result<(Scene, Vec<SatelliteTruth>)> {
             }
         })
         .collect();
-    Ok((scene, truth))
+    Ok((scene, truth, None))
+}
+
+/// The scene of `satellites` on the array, front end and noise of `spec`.
+fn build_scene(
+    spec: &SynthSpec,
+    satellites: Vec<Satellite>,
+    antennas_b: Vec<Vector3<f64>>,
+    line_bias_cycles: Vec<f64>,
+    c_rb: nalgebra::Matrix3<f64>,
+) -> Scene {
+    let complex = spec.format.is_complex();
+    let fif = spec.intermediate_frequency_hz.unwrap_or(if complex {
+        0.0
+    } else {
+        spec.sample_rate_hz / 4.0
+    });
+    Scene {
+        satellites,
+        antennas_b,
+        line_bias_cycles,
+        attitude: AttitudeMotion::Constant(c_rb),
+        front_end: FrontEnd {
+            sample_rate_hz: spec.sample_rate_hz,
+            intermediate_frequency_hz: fif,
+            complex,
+        },
+        noise_seed: spec.noise.then_some(spec.seed ^ 0x7265_636f_7264),
+    }
 }
 
 /// The file names of a recording `name` in layout `format` with `antennas` antennas: one
@@ -450,7 +511,7 @@ pub fn write_recording(
         spec.antennas
     );
     check_bounds(spec)?;
-    let (scene, satellites) = scene(spec)?;
+    let (scene, satellites, navigation) = scene_with_navigation(spec)?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let names = file_names(name, &format, spec.antennas);
     let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
@@ -522,6 +583,7 @@ pub fn write_recording(
         seed: spec.seed,
         noise: spec.noise,
         overlays: spec.overlays.clone(),
+        navigation,
     };
     let truth_path = dir.join(format!("{name}.truth.json"));
     std::fs::write(&truth_path, serde_json::to_string_pretty(&truth)?)

@@ -30,7 +30,9 @@ use serde::Serialize;
 
 use super::acquire::{acquire_with_searches, detect, AcquireOptions, AcquireReport};
 use super::attitude::{AttitudeReport, AttitudeSetup, AttitudeSolver};
+use super::navigation::{NavChannel, NavigationReport, Navigator};
 use super::reader::{Block, Recording};
+use super::rinex::NavFile;
 pub use super::satellite::{mai_corrected_cn0, Row, SatTrack, SatelliteReport};
 use crate::chain::track_block;
 
@@ -63,6 +65,10 @@ pub struct TrackOptions {
     /// PRNs handed over at their search peak even when not detected (a test of the lock
     /// detectors on phantoms; empty for normal use).
     pub force_hand_over: Vec<u8>,
+    /// Decode the navigation message and fix the position ([`super::navigation`]).
+    pub navigation: bool,
+    /// A RINEX navigation file (`--nav`) as a further ephemeris source.
+    pub nav_file: Option<NavFile>,
 }
 
 impl Default for TrackOptions {
@@ -74,6 +80,8 @@ impl Default for TrackOptions {
             reacquire: true,
             attitude: None,
             force_hand_over: Vec::new(),
+            navigation: true,
+            nav_file: None,
         }
     }
 }
@@ -100,8 +108,11 @@ pub struct TrackReport {
     pub tracked_s: f64,
     /// Satellites, by PRN.
     pub satellites: Vec<SatelliteReport>,
-    /// Attitude (three-antenna recordings with `--baselines` and `--sky`).
+    /// Attitude (three-antenna recordings with `--baselines`; lines of sight from `--sky`
+    /// or the navigation fixes).
     pub attitude: Option<AttitudeReport>,
+    /// Navigation: decoded ephemerides, time, position fixes (see [`NavigationReport`]).
+    pub navigation: Option<NavigationReport>,
     /// Wall times.
     pub wall: WallTimes,
     /// Files written by `--out`.
@@ -121,6 +132,8 @@ pub struct TrackRun {
     pub report: TrackReport,
     /// Per-satellite state, in the report's order.
     pub tracks: Vec<SatTrack>,
+    /// The navigation (fixes, decoded ephemerides) for the files.
+    pub navigator: Option<Navigator>,
 }
 
 /// Runs acquisition and tracking on `rec` (1 to 4 antennas).
@@ -177,7 +190,11 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
         let mut ch = Channel::<A>::new(r.prn, &config)?;
         ch.start(r)?;
         let phases = solver.as_ref().map(|s| s.accumulator(r.prn.number()));
-        channels.push((ch, SatTrack::new(*r, fs, phases)));
+        let mut track = SatTrack::new(*r, fs, phases);
+        if opts.navigation {
+            track.nav = Some(NavChannel::new(r.prn.number(), fs));
+        }
+        channels.push((ch, track));
     }
     let total = match opts.seconds {
         Some(s) => {
@@ -197,6 +214,9 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
     let mut collection: Option<Collection> = None;
     let acq_config = opts.acquire.config(rec, acq_report.noncoherent_ms)?;
     let mut attitude = solver.map(|s| (s, Vec::new()));
+    let mut navigator = opts
+        .navigation
+        .then(|| Navigator::new(fs, opts.nav_file.clone()));
     let mut next_window = 0usize;
     let mut progress = Progress::new(total, opts.block, fs);
     loop {
@@ -228,6 +248,10 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
             )?;
             wall.reacquisition_s += t0.elapsed().as_secs_f64();
         }
+        if let Some(nav) = navigator.as_mut() {
+            let end = block.first + block.len() as u64;
+            nav.after_block(channels.iter_mut().filter_map(|(_, s)| s.nav.as_mut()), end)?;
+        }
         if let Some((solver, out)) = attitude.as_mut() {
             let t0 = Instant::now();
             // Windows every active satellite has completed.
@@ -237,6 +261,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
                 .map(|(_, s)| s.last_t)
                 .fold(now, f64::min);
             while solver.window_end(next_window) <= done {
+                navigation_los(solver, navigator.as_ref(), &mut channels, next_window);
                 out.push(solver.solve_window(next_window, channels.iter_mut().map(|(_, s)| s))?);
                 next_window += 1;
             }
@@ -250,6 +275,7 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
             // The windows the stream completed (the last epoch ends within a sample or so of
             // the stream's end).
             while solver.window_end(next_window) <= end_t + 1e-3 {
+                navigation_los(&solver, navigator.as_ref(), &mut channels, next_window);
                 out.push(solver.solve_window(next_window, channels.iter_mut().map(|(_, s)| s))?);
                 next_window += 1;
             }
@@ -269,11 +295,32 @@ fn track_n<const A: usize>(rec: &Recording, opts: &TrackOptions) -> Result<Track
             tracked_s: end_t,
             satellites,
             attitude,
+            navigation: navigator.as_ref().map(Navigator::report),
             wall,
             files_written: Vec::new(),
         },
         tracks,
+        navigator,
     })
+}
+
+/// Without a sky file: the lines of sight of window `k` (at its middle) from the navigation.
+fn navigation_los<const A: usize>(
+    solver: &AttitudeSolver,
+    navigator: Option<&Navigator>,
+    channels: &mut [(Channel<A>, SatTrack)],
+    k: usize,
+) {
+    let Some(nav) = navigator.filter(|_| solver.uses_navigation()) else {
+        return;
+    };
+    let mid = solver.window_end(k) - 0.5 * solver.window_s();
+    for (_, s) in channels.iter_mut() {
+        let los = nav.los_ned(s.prn, mid);
+        if let Some(p) = s.phases.as_mut() {
+            p.set_los(los);
+        }
+    }
 }
 
 /// Recordings longer than this show their progress on stderr, s.

@@ -142,6 +142,43 @@ pub struct BroadcastEphemeris {
     pub raw: Quantized,
 }
 
+impl BroadcastEphemeris {
+    /// The ephemeris as the core's decoder assembles it from the subframes (URA index 0, fit
+    /// interval 4 h, harmonic corrections, `IDOT` and `a_f2` zero as sent).
+    pub fn to_core(&self) -> gnss_attitude::nav::Ephemeris {
+        gnss_attitude::nav::Ephemeris {
+            prn: self.prn,
+            week: self.week,
+            toe_s: self.toe_s,
+            toc_s: self.toc_s,
+            iode: self.iode,
+            iodc: self.iodc,
+            health: self.health,
+            ura_index: 0,
+            fit_interval: false,
+            sqrt_a: self.sqrt_a,
+            e: self.e,
+            i0: self.i0,
+            omega0: self.omega0,
+            omega: self.omega,
+            m0: self.m0,
+            delta_n: self.delta_n,
+            idot: 0.0,
+            omega_dot: self.omega_dot,
+            cuc: 0.0,
+            cus: 0.0,
+            crc: 0.0,
+            crs: 0.0,
+            cic: 0.0,
+            cis: 0.0,
+            af0: self.af0,
+            af1: self.af1,
+            af2: 0.0,
+            tgd: self.tgd,
+        }
+    }
+}
+
 /// The integer fields of an ephemeris (two's complement where signed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Quantized {

@@ -89,6 +89,10 @@ pub struct SatelliteTrack {
     pub cn0_dbhz: Vec<Vec<f64>>,
     /// Carrier-only phase steps (cycle slips of one antenna's RF chain; the code is unchanged).
     pub carrier_steps: Vec<CarrierStep>,
+    /// Navigation data bits (`true` = 1, sent as −1) by bit index: bit `k` covers code epochs
+    /// `[20k, 20k + 20)` of the code count `⌊code_chips_total / 1023⌋`; empty: the
+    /// satellite's `data_seed` decides. Epochs outside the table carry +1.
+    pub data_bits: Vec<bool>,
 }
 
 /// A carrier phase step of one antenna: `cycles` added linearly over `duration_s` from
@@ -164,6 +168,18 @@ impl SatelliteTrack {
             .filter(|c| c.antenna == antenna && t > c.start_s)
             .map(|c| c.cycles * ((t - c.start_s) / c.duration_s.max(1e-12)).min(1.0))
             .sum()
+    }
+
+    /// The data bit (±1) of code epoch `epoch` from [`SatelliteTrack::data_bits`] (a data
+    /// bit 1 is sent as −1, IS-GPS-200's `d = 1` ↔ a phase inversion).
+    pub fn data_bit(&self, epoch: i64) -> f32 {
+        let bit = usize::try_from(epoch.div_euclid(20))
+            .ok()
+            .and_then(|k| self.data_bits.get(k));
+        match bit {
+            Some(true) => -1.0,
+            _ => 1.0,
+        }
     }
 
     /// `μ·r_P` of antenna `antenna` at `t`, m.
@@ -410,7 +426,11 @@ impl Scene {
             let cstep = (code_rate * dt * 4_294_967_296.0).round() as u64;
             const WRAP: u64 = 1023u64 << 32;
             let code = &codes[si];
-            let mut bit = data_bit(s.data_seed, epoch);
+            let bit_of = |epoch: i64| match s.track.as_deref() {
+                Some(t) if !t.data_bits.is_empty() => t.data_bit(epoch),
+                _ => data_bit(s.data_seed, epoch),
+            };
+            let mut bit = bit_of(epoch);
             for v in values.iter_mut().take(n) {
                 let chip = code[((cph >> 32) as usize).min(1022)];
                 *v = amp * f64::from(chip * bit);
@@ -418,7 +438,7 @@ impl Scene {
                 if cph >= WRAP {
                     cph -= WRAP;
                     epoch += 1;
-                    bit = data_bit(s.data_seed, epoch);
+                    bit = bit_of(epoch);
                 }
             }
             // Then the carrier, four samples at a time.
@@ -505,6 +525,7 @@ mod tests {
                 duration_s: 0.004,
                 cycles: 1.0,
             }],
+            data_bits: Vec::new(),
         };
         for &t in &[0.0021, 0.0037, 0.5, 0.7351, 1.9949] {
             assert!((track.range(t) - r(t)).abs() < 1e-6, "range at {t}");
