@@ -223,5 +223,50 @@ pub fn write_track_files(dir: &Path, run: &TrackRun) -> Result<Vec<String>> {
         )?;
         files.push(png);
     }
+    if let Some(nav) = &run.navigator {
+        let csv = dir.join("track_position.csv");
+        write_csv(
+            &csv,
+            &[
+                "t_s",
+                "gps_week",
+                "tow_s",
+                "x_m",
+                "y_m",
+                "z_m",
+                "lat_deg",
+                "lon_deg",
+                "height_m",
+                "clock_bias_m",
+                "pdop",
+                "satellites",
+                "residual_rms_m",
+            ],
+            nav.fixes().iter().map(|f| {
+                let [x, y, z] = f.position_ecef_m;
+                let [lat, lon, h] = f.position_llh;
+                [
+                    f.t_s,
+                    f64::from(f.gps_week),
+                    f.tow_s,
+                    x,
+                    y,
+                    z,
+                    lat,
+                    lon,
+                    h,
+                    f.clock_bias_m,
+                    f.pdop,
+                    f64::from(f.satellites),
+                    f.residual_rms_m,
+                ]
+            }),
+        )?;
+        files.push(csv);
+        let rnx = dir.join("track_nav.rnx");
+        let (ephemerides, iono) = nav.decoded();
+        std::fs::write(&rnx, super::rinex::write_rinex3(&ephemerides, iono.as_ref()))?;
+        files.push(rnx);
+    }
     Ok(files.iter().map(|p| p.display().to_string()).collect())
 }
