@@ -470,11 +470,12 @@ fn lnav_spec(
     }
     let mut spec = record::synth_nav::LnavSpec::default();
     if let Some(text) = gps_start {
-        let parsed = text
-            .split_once(':')
-            .and_then(|(w, t)| Some((w.trim().parse::<u16>().ok()?, t.trim().parse::<f64>().ok()?)));
-        let (week, tow) = parsed
-            .with_context(|| format!("--gps-start {text:?}: expected WEEK:TOW, e.g. 2195:237003.3"))?;
+        let parsed = text.split_once(':').and_then(|(w, t)| {
+            Some((w.trim().parse::<u16>().ok()?, t.trim().parse::<f64>().ok()?))
+        });
+        let (week, tow) = parsed.with_context(|| {
+            format!("--gps-start {text:?}: expected WEEK:TOW, e.g. 2195:237003.3")
+        })?;
         spec.week = week;
         spec.tow_s = tow;
     }

@@ -91,7 +91,10 @@ impl NavChannel {
     /// Takes one tracking epoch (`locked`: code and phase lock).
     pub fn epoch<const A: usize>(&mut self, e: &TrackingEpoch<A>, locked: bool) {
         // a new hand-over restarts the epoch count: the decoder starts over
-        if self.last_index.is_some_and(|l| e.index != l.wrapping_add(1)) {
+        if self
+            .last_index
+            .is_some_and(|l| e.index != l.wrapping_add(1))
+        {
             self.decoder.reset();
         }
         self.last_index = Some(e.index);
@@ -328,13 +331,9 @@ impl Navigator {
                 .iter()
                 .filter_map(|m| m.transmit.gps_time().ok())
                 .max_by(|a, b| a.seconds_since(b).total_cmp(&0.0));
-            self.receiver_epoch =
-                latest.and_then(|t| t.add_seconds(NOMINAL_FLIGHT_S - t_rx).ok());
+            self.receiver_epoch = latest.and_then(|t| t.add_seconds(NOMINAL_FLIGHT_S - t_rx).ok());
         }
-        let Some(receive) = self
-            .receiver_epoch
-            .and_then(|e| e.add_seconds(t_rx).ok())
-        else {
+        let Some(receive) = self.receiver_epoch.and_then(|e| e.add_seconds(t_rx).ok()) else {
             return;
         };
         let observations: Vec<Observation> = measured
@@ -391,10 +390,7 @@ impl Navigator {
         let fix = self.last_fix.as_ref()?;
         let row = self.fixes.last()?;
         let time = fix.time.add_seconds(t_s - row.t_s).ok()?;
-        let eph = self
-            .ephemerides(&time)
-            .into_iter()
-            .find(|e| e.prn == prn)?;
+        let eph = self.ephemerides(&time).into_iter().find(|e| e.prn == prn)?;
         let state = NavState {
             time,
             position_m: fix.position_m,
@@ -423,11 +419,13 @@ impl Navigator {
         let counters = self.store.counters();
         let n = self.fixes.len();
         let mean = (n > 0).then(|| {
-            std::array::from_fn(|i| self.fixes.iter().map(|f| f.position_ecef_m[i]).sum::<f64>() / n as f64)
+            std::array::from_fn(|i| {
+                self.fixes.iter().map(|f| f.position_ecef_m[i]).sum::<f64>() / n as f64
+            })
         });
-        let llh = mean.and_then(|p: [f64; 3]| Geodetic::from_ecef(&p)).map(|g| {
-            [g.lat_rad.to_degrees(), g.lon_rad.to_degrees(), g.height_m]
-        });
+        let llh = mean
+            .and_then(|p: [f64; 3]| Geodetic::from_ecef(&p))
+            .map(|g| [g.lat_rad.to_degrees(), g.lon_rad.to_degrees(), g.height_m]);
         let mut pdops: Vec<f64> = self.fixes.iter().map(|f| f.pdop).collect();
         pdops.sort_by(f64::total_cmp);
         let first = self.fixes.first();
@@ -438,7 +436,11 @@ impl Navigator {
                 "decoded"
             }
             .into(),
-            ephemerides: self.store.ephemerides().map(EphemerisRecord::from).collect(),
+            ephemerides: self
+                .store
+                .ephemerides()
+                .map(EphemerisRecord::from)
+                .collect(),
             gps_week: first.map(|f| f.gps_week),
             tow_s: first.map(|f| f.tow_s),
             position_ecef_m: mean,

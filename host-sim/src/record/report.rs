@@ -265,7 +265,10 @@ pub fn write_track_files(dir: &Path, run: &TrackRun) -> Result<Vec<String>> {
         files.push(csv);
         let rnx = dir.join("track_nav.rnx");
         let (ephemerides, iono) = nav.decoded();
-        std::fs::write(&rnx, super::rinex::write_rinex3(&ephemerides, iono.as_ref()))?;
+        std::fs::write(
+            &rnx,
+            super::rinex::write_rinex3(&ephemerides, iono.as_ref()),
+        )?;
         files.push(rnx);
     }
     Ok(files.iter().map(|p| p.display().to_string()).collect())

@@ -252,7 +252,9 @@ pub fn write_rinex3(ephemerides: &[Ephemeris], iono: Option<&KlobucharParameters
 
 /// A fixed-width number (`D` or `E` exponent); blank is 0.
 fn number(line: &str, start: usize, width: usize) -> Result<f64> {
-    let field = line.get(start..(start + width).min(line.len())).unwrap_or("");
+    let field = line
+        .get(start..(start + width).min(line.len()))
+        .unwrap_or("");
     let t = field.trim().replace(['D', 'd'], "E");
     if t.is_empty() {
         return Ok(0.0);
@@ -341,13 +343,12 @@ pub fn parse_rinex_nav(text: &str) -> Result<NavFile> {
         } else {
             ('G', 7)
         };
-        let record = body.get(k..k + 1 + skip).with_context(|| {
-            format!("navigation record at body line {} is cut short", k + 1)
-        })?;
+        let record = body
+            .get(k..k + 1 + skip)
+            .with_context(|| format!("navigation record at body line {} is cut short", k + 1))?;
         if letter == 'G' {
-            nav.ephemerides.push(
-                record_v(record, v3).with_context(|| format!("record {line:?}"))?,
-            );
+            nav.ephemerides
+                .push(record_v(record, v3).with_context(|| format!("record {line:?}"))?);
         }
         k += 1 + skip;
     }
