@@ -512,7 +512,7 @@ mod tests {
         assert_eq!((e.prn, e.week, e.iode, e.iodc), (6, 1025, 91, 91));
         // 1999-09-02 is a Thursday: 4 days + 17:51:44 into week 1025
         assert_eq!(e.toc_s, 4.0 * 86_400.0 + 17.0 * 3600.0 + 51.0 * 60.0 + 44.0);
-        assert!(close(e.sqrt_a, 5153.654_890_06));
+        assert!(close(e.sqrt_a, 5_153.654_890_06));
         assert!(close(e.af0, -0.839_701_388_031e-3));
         assert!((nav.ionosphere.unwrap().beta[0] - 120_800.0).abs() < 1.0);
     }
