@@ -465,12 +465,12 @@ mod tests {
         assert_eq!(back.ephemerides.len(), ephs.len());
         // the header's ionosphere has D12.4's five significant digits
         let iono = back.ionosphere.unwrap();
-        for (a, b) in iono
-            .alpha
-            .iter()
-            .chain(&iono.beta)
-            .zip(EXAMPLE_KLOBUCHAR.alpha.iter().chain(&EXAMPLE_KLOBUCHAR.beta))
-        {
+        for (a, b) in iono.alpha.iter().chain(&iono.beta).zip(
+            EXAMPLE_KLOBUCHAR
+                .alpha
+                .iter()
+                .chain(&EXAMPLE_KLOBUCHAR.beta),
+        ) {
             assert!((a - b).abs() <= 5e-5 * b.abs(), "{a} vs {b}");
         }
         for (a, b) in ephs.iter().zip(&back.ephemerides) {
