@@ -672,10 +672,13 @@ impl<'a> Flight<'a> {
         };
         let aiding = match self.config.aiding {
             AidingSource::Truth => from_views(&self.views),
-            AidingSource::Own => self
-                .navigation
-                .aiding(&self.world, e.t0, e.k, &prns)
-                .unwrap_or_else(|| from_views(&self.navigation_views)),
+            AidingSource::Own => {
+                let predicted = from_views(&self.navigation_views);
+                match self.navigation.aiding(&self.world, e.t0, e.k, &prns) {
+                    Some(own) => own_first(&prns, own, predicted),
+                    None => predicted,
+                }
+            }
         };
         self.rx
             .receiver_mut()
@@ -856,6 +859,25 @@ fn sample_slips(config: &FlightConfig, world: &World) -> Vec<SampleSlip> {
 
 /// The aiding of satellite `prn` at epoch `k`: its line of sight at the block's start and the
 /// rate over the block (`None` when the views lack it).
+/// The aiding of `prns` in their order: the receiver's own (from its fix and the decoded
+/// ephemeris) where it has one, else the flight computer's prediction (almanac and onboard
+/// orbit), so that a satellite that rose or was re-acquired is aided while its ephemeris is
+/// still being decoded (18–36 s after lock).
+fn own_first(
+    prns: &[u8],
+    own: Vec<SatelliteAiding>,
+    predicted: Vec<SatelliteAiding>,
+) -> Vec<SatelliteAiding> {
+    prns.iter()
+        .filter_map(|prn| {
+            own.iter()
+                .chain(&predicted)
+                .find(|a| a.prn == *prn)
+                .copied()
+        })
+        .collect()
+}
+
 fn aiding_for(prn: u8, views: &(Vec<GpsView>, Vec<GpsView>), k: u64) -> Option<SatelliteAiding> {
     let a = views.0.iter().find(|v| v.prn == prn)?;
     let rate = views
