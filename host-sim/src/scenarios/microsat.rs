@@ -19,6 +19,7 @@ pub mod fast_search;
 pub mod files;
 pub mod limit;
 pub mod metrics;
+pub mod navigation;
 pub mod nmea;
 pub mod run;
 pub mod sample_level;
@@ -29,6 +30,7 @@ use serde_json::json;
 
 use super::{Outcome, RunContext, Scenario, Variant, Variants};
 use metrics::{deg, evaluate, FaultOutcome, FlightMetrics, SigmaCoverage};
+use navigation::{AidingSource, NavigationRecord};
 use run::{fly, FaultPlan, FlightConfig, GyroFault, GyroFaultKind};
 use world::{Blockage, MotionKind};
 
@@ -52,6 +54,11 @@ pub const SCENARIO: Scenario = Scenario {
                 detumbling,
             ),
             Variant::new("short", "30 s without faults (the integration test)", short),
+            Variant::new(
+                "truth-aiding",
+                "the default run aided with the truth's lines of sight (perfect aiding, for comparison)",
+                truth_aiding,
+            ),
         ],
         run: |flight, ctx| run(&flight(ctx.seed), ctx),
     },
@@ -174,6 +181,7 @@ pub fn nadir(seed: u64) -> FlightConfig {
         loop_bandwidth_hz: 1.0,
         sample_level_s: 60.0,
         nmea: true,
+        aiding: AidingSource::Own,
     }
 }
 
@@ -184,6 +192,14 @@ pub fn detumbling(seed: u64) -> FlightConfig {
             duration_s: FLIGHT_S,
         },
         detumble_rates: [0.04, -0.03, 0.02],
+        ..nadir(seed)
+    }
+}
+
+/// The default run with the truth's lines of sight instead of the receiver's own navigation.
+pub fn truth_aiding(seed: u64) -> FlightConfig {
+    FlightConfig {
+        aiding: AidingSource::Truth,
         ..nadir(seed)
     }
 }
@@ -266,6 +282,34 @@ crate::metrics! {
         #[metric(flatten)] #[serde(flatten)] pub sample_level: Option<SampleLevelMetrics>,
         /// What the fast path's searches and channels did.
         #[metric(flatten)] #[serde(flatten)] pub fast_path: FastPathMetrics,
+        /// What the receiver's own navigation did.
+        #[metric(flatten)] #[serde(flatten)] pub navigation: NavigationMetrics,
+    }
+}
+
+crate::metrics! {
+    /// The receiver's own navigation (LNAV decoding, single-point fixes, LEO filter, lines of
+    /// sight; [`navigation`]); flown whatever the aiding source.
+    pub struct NavigationMetrics {
+        /// RMS 3-D position error of the receiver's single-point fixes (null: no fix).
+        #[metric(unit = "m")] pub position_rms_m: Option<f64>,
+        /// RMS 3-D position error of the LEO filter's state at the aiding updates.
+        #[metric(unit = "m")] pub filter_position_rms_m: Option<f64>,
+        /// Time to the first navigation fix (null: none).
+        #[metric(unit = "s")] pub nav_ttff_s: Option<f64>,
+        /// Fixes (one a second at most).
+        #[metric(unit = "")] pub nav_fixes: usize,
+        /// Mean PDOP of the fixes.
+        #[metric(unit = "")] pub nav_pdop_mean: Option<f64>,
+        /// RMS angle between the lines of sight from the receiver's navigation and the
+        /// truth's (light time included), over every aiding update after the first fix.
+        #[metric(unit = "urad")] pub los_error_rms_urad: Option<f64>,
+        /// Satellites with an ephemeris decoded from their LNAV subframes 1–3.
+        #[metric(unit = "")] pub ephemerides_decoded: usize,
+        /// Subframes the core's store took.
+        #[metric(unit = "")] pub nav_subframes: u32,
+        /// Subframes refused by their parity.
+        #[metric(unit = "")] pub nav_parity_failures: u32,
     }
 }
 
@@ -340,6 +384,8 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
         "case": "none: no paper flies this case; each paper's own case is its scenario (snapshot: 002, dcm: 000, gyro-cal: 001, one-stage: 003)",
     });
     o.summary = summary(&m, wall_s);
+    o.summary
+        .push(navigation_line(config.aiding, &metrics.navigation));
     sample_level_summary(&mut o, &record, &m);
     if let Some(dir) = &ctx.out_dir {
         let title = format!("microsat / {} / seed {}", ctx.variant, ctx.seed);
@@ -396,6 +442,45 @@ fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Met
             fast_path_wall_s: record.wall_s.1,
         }),
         fast_path: fast_path_metrics(&record.fast_path),
+        navigation: navigation_metrics(&record.navigation),
+    }
+}
+
+/// One line on the receiver's own navigation.
+fn navigation_line(aiding: AidingSource, n: &NavigationMetrics) -> String {
+    let f = |x: Option<f64>, p: usize| x.map_or("none".into(), |v| format!("{v:.p$}"));
+    format!(
+        "navigation ({}): first fix {} s, {} fixes, position RMS {} m (filter {} m), PDOP {}, line-of-sight error RMS {} µrad, {} ephemerides from {} subframes",
+        match aiding {
+            AidingSource::Own => "aids the receiver",
+            AidingSource::Truth => "flown beside the truth's aiding",
+        },
+        f(n.nav_ttff_s, 0),
+        n.nav_fixes,
+        f(n.position_rms_m, 2),
+        f(n.filter_position_rms_m, 2),
+        f(n.nav_pdop_mean, 2),
+        f(n.los_error_rms_urad, 3),
+        n.ephemerides_decoded,
+        n.nav_subframes,
+    )
+}
+
+fn navigation_metrics(n: &NavigationRecord) -> NavigationMetrics {
+    let rms = |x: &mut dyn Iterator<Item = f64>| {
+        let (sum, count) = x.fold((0.0, 0usize), |(s, c), v| (s + v * v, c + 1));
+        (count > 0).then(|| (sum / count as f64).sqrt())
+    };
+    NavigationMetrics {
+        position_rms_m: rms(&mut n.fix_errors.iter().map(|e| e.1)),
+        filter_position_rms_m: rms(&mut n.filter_errors.iter().copied()),
+        nav_ttff_s: n.first_fix_s,
+        nav_fixes: n.fix_errors.len(),
+        nav_pdop_mean: (!n.fix_errors.is_empty()).then_some(n.pdop_mean),
+        los_error_rms_urad: rms(&mut n.los_errors.iter().copied()).map(|r| r * 1e6),
+        ephemerides_decoded: n.ephemerides,
+        nav_subframes: n.subframes,
+        nav_parity_failures: n.parity_failures,
     }
 }
 

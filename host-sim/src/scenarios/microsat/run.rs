@@ -15,6 +15,7 @@ use nalgebra::{Matrix3, Matrix5, Vector3};
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelChange, EmulatedChannel, PhaseTransient, EPOCH_S};
 use super::fast_search::{FastPathStats, FastSearch, SearchedSignal};
+use super::navigation::{AidingSource, Navigation, NavigationRecord};
 use super::sample_level::{
     locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats, SLIP_CYCLES,
     SLIP_DURATION_S,
@@ -124,6 +125,8 @@ pub struct FlightConfig {
     pub sample_level_s: f64,
     /// The attitude goes to the `--nmea` sink (the main flight; not the fault runs).
     pub nmea: bool,
+    /// Where the receiver's lines of sight come from.
+    pub aiding: AidingSource,
 }
 
 /// One record (every [`RECORD_S`]).
@@ -228,6 +231,8 @@ pub struct FlightRecord {
     pub sample_level_s: f64,
     /// What the fast path's searches and channels did.
     pub fast_path: FastPathStats,
+    /// What the receiver's own navigation did.
+    pub navigation: NavigationRecord,
 }
 
 /// `log(Ĉᵀ C)`: the body-frame rotation vector from the estimate to the truth, rad.
@@ -289,6 +294,8 @@ const SAME_EPOCH_S: f64 = 1e-9;
 const GYRO_SUBSAMPLES: usize = 2;
 /// Epochs between two fast-path searches (whole seconds, as the sample-level stretch).
 const SEARCH_EVERY_EPOCHS: u64 = 1000;
+/// Epochs between two navigation fixes (1 s).
+const NAVIGATION_EVERY_EPOCHS: u64 = 1000;
 /// Epochs between two sky-plot points (1 s).
 const SKY_EVERY_EPOCHS: u64 = 1000;
 /// Extra seconds of samples synthesized beyond the sample-level stretch.
@@ -299,6 +306,8 @@ const GYRO_SEED_SALT: u64 = 0x6779;
 const LINE_BIAS_SEED_SALT: u64 = 0x6c62;
 /// Seed salt of the navigation's orbit and ephemeris errors.
 const NAVIGATION_SEED_SALT: u64 = 0x6e76;
+/// Seed salt of the receiver's own navigation (its clock, code and Doppler noise).
+const OWN_NAVIGATION_SEED_SALT: u64 = 0x6f6e;
 
 /// Runs one flight: the sample-level chain for the first [`FlightConfig::sample_level_s`],
 /// then the fast path from the channels it hands over.
@@ -347,6 +356,8 @@ struct Flight<'a> {
     noise: NoiseFloor,
     /// The fast path's searches.
     search: FastSearch,
+    /// The receiver's own navigation.
+    navigation: Navigation,
     started: std::time::Instant,
 }
 
@@ -378,6 +389,7 @@ impl<'a> Flight<'a> {
         }
         world.line_bias = LineBiasTruth::power_up(config.seed ^ LINE_BIAS_SEED_SALT);
         world.navigation = NavigationError::draw(config.seed ^ NAVIGATION_SEED_SALT);
+        let navigation = Navigation::new(&world, config.seed ^ OWN_NAVIGATION_SEED_SALT)?;
         let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
         let rx = Box::new(
             Front::new(rcfg, SampleLevel::front_config())
@@ -419,6 +431,7 @@ impl<'a> Flight<'a> {
             was_visible: BTreeMap::new(),
             noise: NoiseFloor::new(AdapterConfig::default().noise_time_constant),
             search: FastSearch::new(config.seed, BTreeMap::new())?,
+            navigation,
             started: std::time::Instant::now(),
         })
     }
@@ -454,6 +467,10 @@ impl<'a> Flight<'a> {
         self.advance_channels(&e);
         if !e.in_samples && k % SEARCH_EVERY_EPOCHS == 0 {
             self.search_fast_path(&e)?;
+        }
+        if k % NAVIGATION_EVERY_EPOCHS == 0 {
+            let tracked = self.tracked_for_navigation(&e);
+            self.navigation.second(&self.world, e.t0, &tracked);
         }
         if block_start {
             self.set_aiding(&e)?;
@@ -647,14 +664,46 @@ impl<'a> Flight<'a> {
         };
         wanted.sort_by(|a, b| b.1.total_cmp(&a.1));
         wanted.truncate(MAX_SATELLITES);
-        let aiding: Vec<SatelliteAiding> = wanted
-            .iter()
-            .filter_map(|&(prn, _)| aiding_for(prn, &self.navigation_views, e.k))
-            .collect();
+        let prns: Vec<u8> = wanted.iter().map(|&(prn, _)| prn).collect();
+        let from_views = |views: &(Vec<GpsView>, Vec<GpsView>)| -> Vec<SatelliteAiding> {
+            prns.iter()
+                .filter_map(|&prn| aiding_for(prn, views, e.k))
+                .collect()
+        };
+        let aiding = match self.config.aiding {
+            AidingSource::Truth => from_views(&self.views),
+            AidingSource::Own => {
+                let predicted = from_views(&self.navigation_views);
+                match self.navigation.aiding(&self.world, e.t0, e.k, &prns) {
+                    Some(own) => own_first(&prns, own, predicted),
+                    None => predicted,
+                }
+            }
+        };
         self.rx
             .receiver_mut()
             .set_aiding(&aiding)
             .map_err(|e| anyhow::anyhow!("aiding: {e}"))
+    }
+
+    /// The satellites whose reference-antenna channel tracks (PRN, C/N0 in dB-Hz): the core's
+    /// locked channels in the samples, the emulated channels that deliver on the fast path.
+    fn tracked_for_navigation(&self, e: &EpochTruth) -> Vec<(u8, f64)> {
+        let cn0 = |prn: u8| {
+            e.truths
+                .iter()
+                .find(|s| s.view.prn == prn)
+                .map(|s| (prn, s.cn0_dbhz[0]))
+        };
+        if self.sample_level.is_some() && e.in_samples {
+            locked(&self.rx).into_iter().filter_map(cn0).collect()
+        } else {
+            self.channels
+                .values()
+                .filter(|c| c.delivering())
+                .filter_map(|c| cn0(c.prn))
+                .collect()
+        }
     }
 
     /// The epoch's observations (from the samples or the fast path); returns how many the
@@ -754,6 +803,7 @@ impl<'a> Flight<'a> {
             record.sample_stats = Some(sl.stats().clone());
         }
         record.fast_path = self.search.stats.clone();
+        record.navigation = std::mem::take(&mut self.navigation.record);
         record.calibration = self.rx.receiver_mut().gyro_calibration();
         let b = self.gyro.current_errors();
         let est = self.rx.receiver_mut().gyro_bias();
@@ -809,6 +859,25 @@ fn sample_slips(config: &FlightConfig, world: &World) -> Vec<SampleSlip> {
 
 /// The aiding of satellite `prn` at epoch `k`: its line of sight at the block's start and the
 /// rate over the block (`None` when the views lack it).
+/// The aiding of `prns` in their order: the receiver's own (from its fix and the decoded
+/// ephemeris) where it has one, else the flight computer's prediction (almanac and onboard
+/// orbit), so that a satellite that rose or was re-acquired is aided while its ephemeris is
+/// still being decoded (18–36 s after lock).
+fn own_first(
+    prns: &[u8],
+    own: Vec<SatelliteAiding>,
+    predicted: Vec<SatelliteAiding>,
+) -> Vec<SatelliteAiding> {
+    prns.iter()
+        .filter_map(|prn| {
+            own.iter()
+                .chain(&predicted)
+                .find(|a| a.prn == *prn)
+                .copied()
+        })
+        .collect()
+}
+
 fn aiding_for(prn: u8, views: &(Vec<GpsView>, Vec<GpsView>), k: u64) -> Option<SatelliteAiding> {
     let a = views.0.iter().find(|v| v.prn == prn)?;
     let rate = views
