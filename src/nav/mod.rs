@@ -53,9 +53,10 @@
 //!
 //! # Not done here
 //!
-//! The receiver does not run this yet: integration into `receiver`, `host-sim track` and the
-//! microsat scenario comes separately. No carrier-smoothed pseudoranges, no RINEX output
-//! (host-sim's job), no L2/L5 or CNAV, no GPS–UTC conversion beyond decoding the parameters,
+//! `AttitudeReceiver` does not run this itself: its caller does, and hands the lines of sight
+//! to `set_aiding` (host-sim's `track` from a recording's channels, the microsat scenario in
+//! flight). No carrier-smoothed pseudoranges, no RINEX output (host-sim's job), no L2/L5 or
+//! CNAV, no GPS–UTC conversion beyond decoding the parameters,
 //! no almanac-based orbit computation (the almanac is decoded and stored only).
 
 pub mod atmosphere;
