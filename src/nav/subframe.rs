@@ -9,7 +9,12 @@
 //!   received, so both polarities decode to the same data) and the HOW's subframe id. A window
 //!   that fails is data that happens to look like a preamble (runs of zeros pass the parity at
 //!   any alignment, so a failure while searching says nothing) and is not reported.
-//! * **Synchronized** (after a decoded subframe): only the window 300 bits later is decoded,
+//! * **Confirming** (after a window that decoded): the window is held, not reported, until the
+//!   window 300 bits later also decodes, in the same polarity, with the next time of week. A
+//!   preamble inside the data whose ten words happen to pass the parity (structured data such
+//!   as reserved pages does) never reaches the caller. Once confirmed, both subframes are
+//!   reported: the held one at once, the newer one at the next bit.
+//! * **Synchronized** (after a confirmed pair): only the window 300 bits later is decoded,
 //!   whatever its bits; a failure there is a real subframe refused
 //!   ([`SubframeError::Parity`], [`SubframeError::Preamble`]), reported for the caller to
 //!   count, and the synchronizer goes back to searching.
@@ -110,6 +115,10 @@ pub struct SubframeSync {
     held: u16,
     last_start: Option<u64>,
     expected_start: Option<u64>,
+    /// A decoded window waiting for the next one to confirm it.
+    candidate: Option<Subframe>,
+    /// A confirmed subframe reported at the next bit.
+    queued: Option<Subframe>,
 }
 
 impl Default for SubframeSync {
@@ -126,6 +135,8 @@ impl SubframeSync {
             held: 0,
             last_start: None,
             expected_start: None,
+            candidate: None,
+            queued: None,
         }
     }
 
@@ -134,12 +145,14 @@ impl SubframeSync {
         *self = Self::new();
     }
 
-    /// Whether the last subframe decoded and the next is expected 300 bits later.
+    /// Whether the last subframe decoded and was confirmed, and the next is expected 300 bits
+    /// later.
     pub fn synchronized(&self) -> bool {
-        self.expected_start.is_some()
+        self.expected_start.is_some() && self.candidate.is_none()
     }
 
-    /// Takes the next data bit; returns a subframe when this bit completed one.
+    /// Takes the next data bit; returns a subframe when this bit completed one (or, after a
+    /// confirmation, the confirming subframe one bit late).
     ///
     /// A bit that does not follow the previous one by one bit (20 epochs) restarts the
     /// window.
@@ -149,6 +162,18 @@ impl SubframeSync {
     /// [`SubframeError::Preamble`], [`SubframeError::InvalidId`]; the synchronizer returns
     /// to searching, the bits stay held.
     pub fn push(&mut self, bit: &DataBit) -> Result<Option<Subframe>, SubframeError> {
+        let waiting = self.queued.take();
+        match (self.push_bit(bit), waiting) {
+            (Ok(None), Some(confirmed)) => Ok(Some(confirmed)),
+            (result, waiting) => {
+                // (a boundary cannot fall on the bit after a confirmation; kept, not lost)
+                self.queued = self.queued.or(waiting);
+                result
+            }
+        }
+    }
+
+    fn push_bit(&mut self, bit: &DataBit) -> Result<Option<Subframe>, SubframeError> {
         let follows = self
             .last_start
             .is_some_and(|s| bit.start_epoch == s.saturating_add(EPOCHS_PER_BIT));
@@ -156,6 +181,7 @@ impl SubframeSync {
             self.register = [0; 5];
             self.held = 0;
             self.expected_start = None;
+            self.candidate = None;
         }
         self.last_start = Some(bit.start_epoch);
         self.shift_in(bit.value);
@@ -169,9 +195,12 @@ impl SubframeSync {
             return Ok(None);
         };
         if let Some(expected) = self.expected_start {
-            // synchronized: only the expected boundary counts, whatever its bits say
+            // synchronized or confirming: only the expected boundary counts
             if start_epoch != expected {
                 return Ok(None);
+            }
+            if let Some(candidate) = self.candidate.take() {
+                return Ok(self.confirm(candidate, start_epoch));
             }
             return match self.decode_window(start_epoch) {
                 Ok(subframe) => {
@@ -184,17 +213,39 @@ impl SubframeSync {
                 }
             };
         }
-        // searching: a window that starts with the preamble in either polarity and decodes
+        self.search(start_epoch);
+        Ok(None)
+    }
+
+    /// Searching: a window that starts with the preamble in either polarity and decodes
+    /// becomes the candidate, to be confirmed 300 bits later.
+    fn search(&mut self, start_epoch: u64) {
         let raw_preamble = self.window_bits(0, 8);
         if raw_preamble != PREAMBLE && raw_preamble != (!PREAMBLE & 0xFF) {
-            return Ok(None);
+            return;
         }
+        if let Ok(subframe) = self.decode_window(start_epoch) {
+            self.candidate = Some(subframe);
+            self.expected_start = Some(next_start(start_epoch));
+        }
+    }
+
+    /// Confirming: the window 300 bits after `candidate` confirms it if it decodes in the same
+    /// polarity with the next time of week; then the candidate is returned and this window
+    /// queued. Otherwise the candidate was data that looked like a subframe: it is dropped
+    /// and this window searched as any other.
+    fn confirm(&mut self, candidate: Subframe, start_epoch: u64) -> Option<Subframe> {
+        self.expected_start = None;
         match self.decode_window(start_epoch) {
-            Ok(subframe) => {
+            Ok(next) if follows_in_time(&candidate, &next) => {
                 self.expected_start = Some(next_start(start_epoch));
-                Ok(Some(subframe))
+                self.queued = Some(next);
+                Some(candidate)
             }
-            Err(_) => Ok(None),
+            _ => {
+                self.search(start_epoch);
+                None
+            }
         }
     }
 
@@ -261,6 +312,13 @@ impl SubframeSync {
     }
 }
 
+/// Whether `next` is the subframe after `first`: same polarity, time of week one subframe
+/// later (the count wraps at the end of the week).
+fn follows_in_time(first: &Subframe, next: &Subframe) -> bool {
+    let counts_per_week = (WEEK_S / SUBFRAME_S) as u32;
+    next.inverted == first.inverted && next.tow_count() == (first.tow_count() + 1) % counts_per_week
+}
+
 /// The start epoch of the subframe after the one starting at `start`.
 fn next_start(start: u64) -> u64 {
     start.saturating_add(SUBFRAME_BITS * EPOCHS_PER_BIT)
@@ -275,8 +333,8 @@ mod tests {
 
     /// Bits of one subframe.
     const SUBFRAME: usize = 300;
-    /// Room for the test stream: a preamble run and three subframes.
-    const STREAM: usize = 1024;
+    /// Room for the test stream: a preamble run and four subframes.
+    const STREAM: usize = 1280;
 
     /// Encodes ten data words into 300 transmitted bits after a word ending in `prev`.
     fn encode(words: &[u32; 10], mut prev: (bool, bool)) -> Vec<bool, SUBFRAME> {
@@ -324,17 +382,27 @@ mod tests {
             .collect()
     }
 
-    fn stream() -> (Vec<bool, STREAM>, Vec<[u32; 10], 3>) {
+    /// Ten bits of lead-in, then subframes with these TOW counts (ids 1, 2, …).
+    fn stream_of(tow_counts: &[u32]) -> (Vec<bool, STREAM>, Vec<[u32; 10], 4>) {
         let mut bits: Vec<bool, STREAM> =
             Vec::from_slice(&[true, false, true, true, false, false, true, false]).expect("room");
         bits.extend([false, false]);
         let mut words = Vec::new();
-        for k in 0..3u32 {
-            let w = subframe_words(1000 + k, k % 5 + 1, 0x5A_5A5A ^ k);
+        for (k, &tow) in tow_counts.iter().enumerate() {
+            let k = k as u32;
+            let w = subframe_words(tow, k % 5 + 1, 0x5A_5A5A ^ k);
             bits.extend(encode(&w, (false, false)));
-            words.push(w).expect("three subframes");
+            words.push(w).expect("at most four subframes");
         }
         (bits, words)
+    }
+
+    fn stream() -> (Vec<bool, STREAM>, Vec<[u32; 10], 4>) {
+        stream_of(&[1000, 1001, 1002])
+    }
+
+    fn decoded(results: &[Result<Option<Subframe>, SubframeError>]) -> Vec<Subframe, 4> {
+        results.iter().filter_map(|r| r.ok().flatten()).collect()
     }
 
     #[test]
@@ -360,10 +428,56 @@ mod tests {
     }
 
     #[test]
+    fn a_window_that_decodes_is_held_until_the_next_subframe_confirms_it() {
+        // a lone subframe: it decodes, but nothing follows it in time
+        let (bits, _) = stream_of(&[1000]);
+        let mut sync = SubframeSync::new();
+        assert!(decoded(&feed(&mut sync, &bits, 0, false)).is_empty());
+        assert!(!sync.synchronized());
+        // a window that decodes followed by one whose time does not follow (a false
+        // preamble in the data): dropped; the true pair after it is reported
+        let (mut bits, _) = stream_of(&[1000, 1005, 1006]);
+        bits.push(true).expect("room"); // the bit after which 1006 is reported
+        let mut sync = SubframeSync::new();
+        let results = feed(&mut sync, &bits, 0, false);
+        let tows: Vec<u32, 4> = decoded(&results).iter().map(|s| s.tow_count()).collect();
+        assert_eq!(tows.as_slice(), &[1005, 1006]);
+        assert!(
+            results.iter().all(|r| r.is_ok()),
+            "a candidate is not an error"
+        );
+        assert!(sync.synchronized());
+    }
+
+    #[test]
+    fn the_confirming_subframe_is_reported_one_bit_later() {
+        let (bits, _) = stream_of(&[1000, 1001]);
+        let mut sync = SubframeSync::new();
+        let results = feed(&mut sync, &bits[..bits.len() - 1], 0, false);
+        assert_eq!(
+            decoded(&results).len(),
+            0,
+            "the pair is complete only at its last bit"
+        );
+        let last = sync.push(&DataBit {
+            value: bits[bits.len() - 1],
+            start_epoch: 20 * (bits.len() as u64 - 1),
+            strength: 1.0,
+        });
+        assert_eq!(last.map(|s| s.map(|s| s.tow_count())), Ok(Some(1000)));
+        let next = sync.push(&DataBit {
+            value: true,
+            start_epoch: 20 * bits.len() as u64,
+            strength: 1.0,
+        });
+        assert_eq!(next.map(|s| s.map(|s| s.tow_count())), Ok(Some(1001)));
+    }
+
+    #[test]
     fn a_bit_error_in_a_data_word_is_a_parity_error() {
-        let (mut bits, _) = stream();
-        // word 5 of the second subframe
-        let at = 10 + 300 + 4 * 30 + 7;
+        let (mut bits, _) = stream_of(&[1000, 1001, 1002, 1003]);
+        // word 5 of the third subframe (the first two are a confirmed pair)
+        let at = 10 + 2 * 300 + 4 * 30 + 7;
         bits[at] = !bits[at];
         let mut sync = SubframeSync::new();
         let results = feed(&mut sync, &bits, 0, false);
