@@ -33,6 +33,7 @@ use metrics::{deg, evaluate, FaultOutcome, FlightMetrics, SigmaCoverage};
 use navigation::{AidingSource, NavigationRecord};
 use run::{fly, FaultPlan, FlightConfig, GyroFault, GyroFaultKind};
 use world::{Blockage, MotionKind};
+use crate::synth::quantize::Quantizer;
 
 /// A variant's flight for a seed.
 type MakeFlight = fn(u64) -> FlightConfig;
@@ -182,6 +183,7 @@ pub fn nadir(seed: u64) -> FlightConfig {
         sample_level_s: 60.0,
         nmea: true,
         aiding: AidingSource::Own,
+        front_end: Quantizer::I8,
     }
 }
 
@@ -284,6 +286,9 @@ crate::metrics! {
         #[metric(flatten)] #[serde(flatten)] pub fast_path: FastPathMetrics,
         /// What the receiver's own navigation did.
         #[metric(flatten)] #[serde(flatten)] pub navigation: NavigationMetrics,
+        /// The front end (`--front-end`): `i8` (CS8), `sm2`, `bit1`; the sample-level stretch
+        /// quantizes with it, the fast path lowers its C/N0 by the quantizer's theoretical loss.
+        #[metric(unit = "")] pub front_end: &'static str,
     }
 }
 
@@ -365,6 +370,10 @@ crate::metrics! {
 }
 
 fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
+    let config = &FlightConfig {
+        front_end: ctx.front_end,
+        ..config.clone()
+    };
     let started = std::time::Instant::now();
     let bar = crate::report::progress(config.duration_s as u64, "flight (s)");
     let record = fly(config, Some(&bar))?;
@@ -377,7 +386,7 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
     m.faults.extend(faults);
     m.fault_runs_coverage = coverage;
     let wall_s = started.elapsed().as_secs_f64();
-    let mut metrics = metrics_of(&m, &record, wall_s);
+    let mut metrics = metrics_of(&m, &record, wall_s, config.front_end);
     metrics.fault_runs_wall_s = fault_runs_wall_s;
     let mut o = Outcome::new(&metrics)?;
     o.paper = json!({
@@ -394,7 +403,12 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
     Ok(o)
 }
 
-fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Metrics {
+fn metrics_of(
+    m: &FlightMetrics,
+    record: &run::FlightRecord,
+    wall_s: f64,
+    front_end: Quantizer,
+) -> Metrics {
     let [on_samples, fast] = m.by_path;
     let ratio = |a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>| {
         let r = a.component_div(b);
@@ -443,6 +457,7 @@ fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Met
         }),
         fast_path: fast_path_metrics(&record.fast_path),
         navigation: navigation_metrics(&record.navigation),
+        front_end: front_end.name(),
     }
 }
 

@@ -35,7 +35,7 @@ pub const SCENARIOS: &[Scenario] = &[
 ];
 
 /// The scenarios whose sample-level path takes `--front-end` other than `i8`.
-pub const FRONT_END_SCENARIOS: &[&str] = &["signal", "one-stage"];
+pub const FRONT_END_SCENARIOS: &[&str] = &["signal", "one-stage", "microsat"];
 
 /// What `host-sim` runs when called without arguments.
 pub const DEFAULT_SCENARIO: &str = "microsat";

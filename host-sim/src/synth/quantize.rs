@@ -71,6 +71,18 @@ impl Quantizer {
         }
     }
 
+    /// The C/N0 loss of this quantizer on white Gaussian noise, in theory, dB: 0 for `i8`
+    /// (16 LSB per σ), 0.55 for 2-bit sign/magnitude at the [`TWO_BIT_THRESHOLD`], 1.96
+    /// (`10·log₁₀(π/2)`) for 1-bit. The microsat fast path lowers the correlator outputs it
+    /// emulates by this much; the sample-level paths get the loss from the quantizer itself.
+    pub fn theory_loss_db(self) -> f64 {
+        match self {
+            Self::I8 => 0.0,
+            Self::Sm2 => 0.55,
+            Self::Bit1 => 10.0 * std::f64::consts::FRAC_PI_2.log10(),
+        }
+    }
+
     /// The quantizer called `name`.
     ///
     /// # Errors

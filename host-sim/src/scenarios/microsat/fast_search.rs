@@ -27,7 +27,7 @@ use gnss_attitude::tracking::{Acquisition, AcquisitionConfig};
 use nalgebra::{Matrix3, Vector3};
 
 use super::sample_level::{SampleLevel, RETRY_AFTER_S, SAMPLE_RATE_HZ};
-use crate::synth::quantize::{decode, encode};
+use crate::synth::quantize::Quantizer;
 use crate::synth::scene::mix;
 use crate::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 
@@ -69,6 +69,8 @@ pub struct FastSearch {
     acquisition: Box<Acquisition<2048>>,
     config: AcquisitionConfig,
     seed: u64,
+    /// The front end that quantizes the search blocks.
+    front_end: Quantizer,
     /// When each PRN's last search failed, s.
     failed_at: BTreeMap<u8, f64>,
     /// What the searches and channels did.
@@ -80,13 +82,14 @@ const SEARCH_SEED_SALT: u64 = 0x6661_7374;
 
 impl FastSearch {
     /// The searches of a flight drawn with `seed`, continuing the failed searches of the
-    /// sample-level stretch (`failed_at`, s).
-    pub fn new(seed: u64, failed_at: BTreeMap<u8, f64>) -> Result<Self> {
+    /// sample-level stretch (`failed_at`, s), its blocks quantized by `front_end`.
+    pub fn new(seed: u64, failed_at: BTreeMap<u8, f64>, front_end: Quantizer) -> Result<Self> {
         let acquisition = Box::new(Acquisition::<2048>::new().map_err(|e| anyhow!("{e}"))?);
         Ok(Self {
             acquisition,
             config: SampleLevel::front_config().acquisition,
             seed,
+            front_end,
             failed_at,
             stats: FastPathStats::default(),
         })
@@ -114,8 +117,7 @@ impl FastSearch {
         let n = self.config.samples_needed();
         let scene = self.scene(prn, k, signal);
         let analog = scene.synthesize(0, n);
-        let streams = encode(SampleFormat::Cs8, &analog)?;
-        let planar = decode(SampleFormat::Cs8, &streams, 1, n)?;
+        let planar = self.front_end.quantize(SampleFormat::Cs8, &analog, n)?;
         let (i, q) = (&planar.i[0], &planar.q[0]);
         let detected = self
             .acquisition

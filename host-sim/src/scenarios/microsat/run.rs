@@ -15,6 +15,7 @@ use nalgebra::{Matrix3, Matrix5, Vector3};
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelChange, EmulatedChannel, PhaseTransient, EPOCH_S};
 use super::fast_search::{FastPathStats, FastSearch, SearchedSignal};
+use crate::synth::quantize::Quantizer;
 use super::navigation::{AidingSource, Navigation, NavigationRecord};
 use super::sample_level::{
     locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats, SLIP_CYCLES,
@@ -127,6 +128,10 @@ pub struct FlightConfig {
     pub nmea: bool,
     /// Where the receiver's lines of sight come from.
     pub aiding: AidingSource,
+    /// The front end (`--front-end`): the sample-level stretch's quantizer, the fast path's
+    /// searches' too, and its emulated correlators' C/N0 lowered by
+    /// [`Quantizer::theory_loss_db`].
+    pub front_end: Quantizer,
 }
 
 /// One record (every [`RECORD_S`]).
@@ -413,6 +418,7 @@ impl<'a> Flight<'a> {
                 config.sample_level_s + SAMPLE_MARGIN_S,
                 config.seed,
                 &record.slips,
+                config.front_end,
             )
         });
         Ok(Self {
@@ -430,7 +436,7 @@ impl<'a> Flight<'a> {
             navigation_views: (Vec::new(), Vec::new()),
             was_visible: BTreeMap::new(),
             noise: NoiseFloor::new(AdapterConfig::default().noise_time_constant),
-            search: FastSearch::new(config.seed, BTreeMap::new())?,
+            search: FastSearch::new(config.seed, BTreeMap::new(), config.front_end)?,
             navigation,
             started: std::time::Instant::now(),
         })
@@ -508,7 +514,9 @@ impl<'a> Flight<'a> {
             self.rx.release(p);
         }
         self.record.sample_stats = Some(sl.stats().clone());
-        if let Ok(search) = FastSearch::new(self.config.seed, sl.failed_at().clone()) {
+        if let Ok(search) =
+            FastSearch::new(self.config.seed, sl.failed_at().clone(), self.config.front_end)
+        {
             self.search = search;
         }
         self.record.wall_s.0 = self.started.elapsed().as_secs_f64();
@@ -628,6 +636,7 @@ impl<'a> Flight<'a> {
                 .iter()
                 .find(|s| s.view.prn == prn && s.visible[0])
                 .map(|s| SearchedSignal {
+                    // the analog signal: the search quantizes it with the front end
                     cn0_dbhz: s.cn0_dbhz[0],
                     doppler_hz: s.view.doppler_hz,
                     doppler_rate_hz_s: rate,
@@ -693,7 +702,7 @@ impl<'a> Flight<'a> {
             e.truths
                 .iter()
                 .find(|s| s.view.prn == prn)
-                .map(|s| (prn, s.cn0_dbhz[0]))
+                .map(|s| (prn, s.cn0_dbhz[0] - self.config.front_end.theory_loss_db()))
         };
         if self.sample_level.is_some() && e.in_samples {
             locked(&self.rx).into_iter().filter_map(cn0).collect()
@@ -718,7 +727,12 @@ impl<'a> Flight<'a> {
         }
         let line_bias = self.world.line_bias.at(e.tc);
         for ch in self.channels.values_mut().filter(|c| c.active()) {
-            let sat = e.truths.iter().find(|s| s.view.prn == ch.prn);
+            let sat = e
+                .truths
+                .iter()
+                .find(|s| s.view.prn == ch.prn)
+                .map(|s| s.after_front_end(self.config.front_end));
+            let sat = sat.as_ref();
             let psi = sat.map_or([0.0; 3], |s| {
                 [0, 1, 2].map(|p| self.world.geometric_phase(p, &s.view.los, &e.c_ib))
             });

@@ -1,6 +1,6 @@
 //! The sample-level stretch of a flight: the world's sky, orbit Doppler and attitude
 //! synthesized as three-antenna complex samples ([`crate::synth`], a [`SatelliteTrack`] per
-//! satellite), quantized to CS8, then the core's acquisition (±50 kHz, the satellites the
+//! satellite), quantized to CS8 (or the `--front-end`'s 2- or 1-bit levels), then the core's acquisition (±50 kHz, the satellites the
 //! almanac and the orbit predict above the reference antenna's mask, searched again every
 //! whole second for new ones), its fixed-point correlators and LEO tracking channels
 //! ([`ChannelConfig::leo`](gnss_attitude::tracking::ChannelConfig::leo)), the adapter and the epoch clock, all inside the core's
@@ -257,8 +257,18 @@ pub fn chain_params(
 
 impl SampleLevel {
     /// The stretch of `world`'s first `duration_s` drawn with `seed`, with `slips`.
-    pub fn new(world: &World, duration_s: f64, seed: u64, slips: &[SampleSlip]) -> Self {
-        let params = chain_params(world, duration_s, seed, slips);
+    /// `front_end` quantizes the samples the receiver gets.
+    pub fn new(
+        world: &World,
+        duration_s: f64,
+        seed: u64,
+        slips: &[SampleSlip],
+        front_end: Quantizer,
+    ) -> Self {
+        let params = ChainParams {
+            quantizer: front_end,
+            ..chain_params(world, duration_s, seed, slips)
+        };
         let prns = params.scene.satellites.iter().map(|s| s.prn).collect();
         let mut stats = SampleStats {
             satellites: params.scene.satellites.len(),

@@ -5,6 +5,7 @@
 use gnss_attitude::geometry::Quaternion;
 use nalgebra::{Matrix3, Vector3};
 
+use crate::synth::quantize::Quantizer;
 use crate::truth::attitude::{AttitudeTruth, DetumblingBody, NadirTumble};
 use crate::truth::gps::Almanac;
 use crate::truth::orbit::Orbit;
@@ -63,6 +64,17 @@ pub struct SatTruth {
     pub visible: [bool; 3],
     /// C/N0 at each antenna (of the satellite, before blockage), dB-Hz.
     pub cn0_dbhz: [f64; 3],
+}
+
+impl SatTruth {
+    /// The satellite as the correlators behind `front_end` see it: C/N0 lowered by the
+    /// quantizer's loss ([`Quantizer::theory_loss_db`]).
+    pub fn after_front_end(&self, front_end: Quantizer) -> Self {
+        Self {
+            cn0_dbhz: self.cn0_dbhz.map(|c| c - front_end.theory_loss_db()),
+            ..*self
+        }
+    }
 }
 
 /// A time interval during which one antenna receives nothing.
