@@ -28,7 +28,8 @@ fn short_signal(quantizer: Quantizer, seed: u64) -> ChainParams {
 /// share the thermal noise) differ by the loss to about 0.1 dB (measured: 0.53 and 1.90 dB
 /// with this seed). The bands (1.2–3.0 dB, 0.2–1.2 dB, issue 18's targets as upper ends) fail
 /// if the quantizer is missing (0 dB) or the wrong one (a 1-bit quantizer in place of the
-/// 2-bit one, or the reverse).
+/// 2-bit one, or the reverse), and the measured loss must agree with the model the microsat
+/// fast path applies ([`Quantizer::theory_loss_db`]) within 0.3 dB.
 #[test]
 fn quantized_front_ends_lower_the_tracked_cn0_by_the_quantization_loss() {
     let seed = 5;
@@ -51,6 +52,12 @@ fn quantized_front_ends_lower_the_tracked_cn0_by_the_quantization_loss() {
         assert!(
             band.contains(&loss),
             "{q}: loss {loss:.2} dB outside {band:?}"
+        );
+        // the microsat fast path emulates its correlators with this model of the loss
+        assert!(
+            (loss - q.theory_loss_db()).abs() < 0.3,
+            "{q}: measured {loss:.2} dB, the fast path's model {:.2} dB",
+            q.theory_loss_db()
         );
     }
 }
