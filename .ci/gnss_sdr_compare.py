@@ -8,7 +8,10 @@ Checks (exit status 1 if one fails):
     RINEX print rounding) of the truth file's value;
   * GNSS-SDR's NMEA GGA fixes with PDOP <= 3 (from the GSA sentence of the epoch) exist and all
     lie within 15 m (3-D) of the truth position; its KML track exists and its median point lies
-    within 15 m.
+    within 15 m;
+  * the receiver clock offset RTKLIB estimates (the synthesizer's sample clock is GPS time) has a
+    median within 100 ns of zero, and GNSS-SDR's C/N0 (RINEX S1C, median per PRN) is within 2 dB
+    of the synthesized one.
 Prints the first-fix time (s after the first sample), median and worst horizontal/vertical error
 for both receivers and writes the figures as one JSON object to --json-out.
 """
@@ -28,6 +31,8 @@ E2_WGS84 = F_WGS84 * (2.0 - F_WGS84)
 PI = math.pi
 LIMIT_M = 15.0
 PDOP_GATE = 3.0
+CLOCK_LIMIT_NS = 100.0
+CN0_LIMIT_DB = 2.0
 
 # One LNAV least significant bit of each compared field in RINEX units (IS-GPS-200 table 20-III
 # and 20-I; semicircles converted to radians).
@@ -142,6 +147,41 @@ def compare_ephemerides(truth_ephs, decoded):
     return worst, missing
 
 
+def parse_rinex3_obs_cn0(path):
+    """{prn: [S1C, dB-Hz]} of a RINEX 3 GPS observation file."""
+    with open(path, encoding="ascii", errors="replace") as f:
+        lines = f.read().splitlines()
+    types = []
+    for l in lines:
+        if "SYS / # / OBS TYPES" in l and l.startswith("G"):
+            types = l[7:60].split()
+        if "END OF HEADER" in l:
+            break
+    if "S1C" not in types:
+        return {}
+    k = types.index("S1C")
+    body = next(i for i, l in enumerate(lines) if "END OF HEADER" in l) + 1
+    cn0 = {}
+    for l in lines[body:]:
+        if l.startswith("G") and len(l) >= 3 + 16 * k + 14:
+            text = l[3 + 16 * k:3 + 16 * k + 14].strip()
+            if text:
+                cn0.setdefault(int(l[1:3]), []).append(float(text))
+    return cn0
+
+
+def parse_rx_clock_offsets(path):
+    """RTKLIB's receiver clock offsets (s) from GNSS-SDR's glog INFO file, after its whole-ms
+    correction of the receiver time (|offset| < 1 ms)."""
+    values = []
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            m = re.search(r"RX time offset= *([-+0-9.eE]+) *\[s\]", line)
+            if m and abs(float(m.group(1))) < 1e-3:
+                values.append(float(m.group(1)))
+    return values
+
+
 def sod(hhmmss):
     h, m, s = int(hhmmss[0:2]), int(hhmmss[2:4]), float(hhmmss[4:])
     return 3600 * h + 60 * m + s
@@ -217,6 +257,7 @@ def main():
     ap.add_argument("--run-s", type=float, required=True)
     ap.add_argument("--track-s", type=float, required=True)
     ap.add_argument("--leap-s", type=float, default=18.0)
+    ap.add_argument("--glog", help="GNSS-SDR's glog INFO file (receiver clock offsets)")
     ap.add_argument("--json-out")
     a = ap.parse_args()
 
@@ -274,6 +315,32 @@ def main():
     elif kml_median > LIMIT_M:
         failures.append(f"GNSS-SDR's KML track is {kml_median:.1f} m (median) from the truth")
 
+    # Time: the synthesizer's sample clock is GPS time, so the receiver clock offset RTKLIB
+    # estimates (after GNSS-SDR's whole-millisecond correction) is how far the encoded time
+    # (TOW, code phase, satellite clock) is from the truth's.
+    offsets = parse_rx_clock_offsets(a.glog) if a.glog and os.path.exists(a.glog) else []
+    clock = {
+        "epochs": len(offsets),
+        "median_ns": statistics.median(offsets) * 1e9 if offsets else None,
+        "sigma_ns": statistics.pstdev(offsets) * 1e9 if offsets else None,
+    }
+    print(f"GNSS-SDR receiver clock offset vs GPS time (the synthesizer's sample clock): median "
+          f"{fmt(clock['median_ns'], 2)} ns, sigma {fmt(clock['sigma_ns'], 1)} ns over {clock['epochs']} solutions")
+    if offsets and abs(clock["median_ns"]) > CLOCK_LIMIT_NS:
+        failures.append(f"receiver clock offset {clock['median_ns']:.0f} ns (limit {CLOCK_LIMIT_NS} ns)")
+
+    # C/N0: GNSS-SDR's estimate (RINEX S1C) against the synthesized one.
+    obs = glob.glob(os.path.join(a.pvt_dir, "**", "*.*O"), recursive=True)
+    cn0 = parse_rinex3_obs_cn0(obs[0]) if obs else {}
+    truth_cn0 = {s["prn"]: s["cn0_dbhz"] for s in truth.get("satellites", [])}
+    cn0_err = {prn: statistics.median(v) - truth_cn0[prn] for prn, v in cn0.items() if prn in truth_cn0}
+    if cn0_err:
+        print("GNSS-SDR C/N0 (median S1C) minus synthesized, dB: "
+              + ", ".join(f"G{prn:02} {e:+.2f}" for prn, e in sorted(cn0_err.items())))
+        worst_cn0 = max(abs(e) for e in cn0_err.values())
+        if worst_cn0 > CN0_LIMIT_DB:
+            failures.append(f"GNSS-SDR's C/N0 is {worst_cn0:.1f} dB off the synthesized (limit {CN0_LIMIT_DB} dB)")
+
     # host-sim track --json on the same file.
     track = json.load(open(a.track))
     tn = track.get("navigation") or {}
@@ -292,6 +359,8 @@ def main():
         "install_s": a.install_s,
         "gnss_sdr": dict(sdr, run_s=a.run_s, kml_points=len(kml_points), kml_median_3d_m=kml_median, kml_worst_3d_m=kml_worst),
         "host_sim_track": dict(hs, run_s=a.track_s),
+        "rx_clock_offset": clock,
+        "cn0_minus_synthesized_db": {f"G{p:02}": e for p, e in sorted(cn0_err.items())},
         "ephemerides_sent": n_sent,
         "ephemerides_decoded": n_decoded,
         "ephemeris_worst_lsb": worst,
