@@ -32,11 +32,15 @@ if [ "$(id -u)" != 0 ]; then SUDO="sudo -n"; fi
 
 echo "=== gnss-sdr install ==="
 install_s=0
-if ! command -v gnss-sdr >/dev/null; then
+missing=""
+command -v gnss-sdr >/dev/null || missing="gnss-sdr"
+command -v python3 >/dev/null || missing="$missing python3"
+if [ -n "$missing" ]; then
   t0=$(date +%s)
   export DEBIAN_FRONTEND=noninteractive
   $SUDO apt-get update -q
-  $SUDO apt-get install -y -q --no-install-recommends gnss-sdr
+  # shellcheck disable=SC2086
+  $SUDO apt-get install -y -q --no-install-recommends $missing
   install_s=$(( $(date +%s) - t0 ))
 fi
 echo "gnss-sdr install: ${install_s} s ($(gnss-sdr --version 2>&1 | grep -m1 -i version))"
