@@ -29,11 +29,11 @@ use anyhow::Result;
 use serde_json::json;
 
 use super::{Outcome, RunContext, Scenario, Variant, Variants};
+use crate::synth::quantize::Quantizer;
 use metrics::{deg, evaluate, FaultOutcome, FlightMetrics, SigmaCoverage};
 use navigation::{AidingSource, NavigationRecord};
 use run::{fly, FaultPlan, FlightConfig, GyroFault, GyroFaultKind};
 use world::{Blockage, MotionKind};
-use crate::synth::quantize::Quantizer;
 
 /// A variant's flight for a seed.
 type MakeFlight = fn(u64) -> FlightConfig;

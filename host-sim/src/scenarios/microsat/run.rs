@@ -15,13 +15,13 @@ use nalgebra::{Matrix3, Matrix5, Vector3};
 use super::bound::bound_rad;
 use super::fast_path::{rng, ChannelChange, EmulatedChannel, PhaseTransient, EPOCH_S};
 use super::fast_search::{FastPathStats, FastSearch, SearchedSignal};
-use crate::synth::quantize::Quantizer;
 use super::navigation::{AidingSource, Navigation, NavigationRecord};
 use super::sample_level::{
     locked, reported_cn0_dbhz, Front, SampleLevel, SampleSlip, SampleStats, SLIP_CYCLES,
     SLIP_DURATION_S,
 };
 use super::world::{Blockage, LineBiasTruth, MotionKind, NavigationError, SatTruth, World};
+use crate::synth::quantize::Quantizer;
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
 use crate::truth::sky::GpsView;
@@ -514,9 +514,11 @@ impl<'a> Flight<'a> {
             self.rx.release(p);
         }
         self.record.sample_stats = Some(sl.stats().clone());
-        if let Ok(search) =
-            FastSearch::new(self.config.seed, sl.failed_at().clone(), self.config.front_end)
-        {
+        if let Ok(search) = FastSearch::new(
+            self.config.seed,
+            sl.failed_at().clone(),
+            self.config.front_end,
+        ) {
             self.search = search;
         }
         self.record.wall_s.0 = self.started.elapsed().as_secs_f64();
