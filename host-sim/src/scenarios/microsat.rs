@@ -60,7 +60,15 @@ pub const SCENARIO: Scenario = Scenario {
                 truth_aiding,
             ),
         ],
-        run: |flight, ctx| run(&flight(ctx.seed), ctx),
+        run: |flight, ctx| {
+            run(
+                &FlightConfig {
+                    tle: ctx.tle.clone(),
+                    ..flight(ctx.seed)
+                },
+                ctx,
+            )
+        },
     },
 };
 
@@ -182,6 +190,7 @@ pub fn nadir(seed: u64) -> FlightConfig {
         sample_level_s: 60.0,
         nmea: true,
         aiding: AidingSource::Own,
+        tle: None,
     }
 }
 
@@ -366,6 +375,9 @@ crate::metrics! {
 
 fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
     let started = std::time::Instant::now();
+    if let Some(tle) = &config.tle {
+        eprintln!("host-sim: {}", orbit_note(tle)?);
+    }
     let bar = crate::report::progress(config.duration_s as u64, "flight (s)");
     let record = fly(config, Some(&bar))?;
     bar.finish_and_clear();
@@ -392,6 +404,26 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
         o.files = files::write_all(dir, &record, &m, &title, &o.summary)?;
     }
     Ok(o)
+}
+
+/// Where a `--tle` orbit comes from and how far it was propagated (stderr: the JSON has no
+/// place for a name).
+fn orbit_note(tle: &crate::truth::tle::Tle) -> Result<String> {
+    let world = world::World::new(MotionKind::Nadir, 0.0, nadir(1).gps_offset_s, [0.0; 3]);
+    let gps_start_s =
+        f64::from(crate::synth::lnav::BUNDLED_ALMANAC_WEEK) * crate::truth::gps::WEEK_S
+            + world.sky.gps_time_of_week_s;
+    let flown = crate::truth::tle::TleOrbit::new(tle.clone(), gps_start_s, 0.0)?;
+    let r = flown.ecef(0.0).r.norm() - crate::truth::orbit::R_EARTH;
+    Ok(format!(
+        "orbit: TLE {} (NORAD {}, epoch {} UTC), SGP4 propagated {:+.2} days from its epoch to the flight's GPS start (the almanac's), radius − R⊕ {:.1} km at t = 0; TEME → ECEF by GMST, polar motion ignored; the flight computer's copy is {} m ahead along the track",
+        tle.label(),
+        tle.elements.norad_id,
+        tle.elements.datetime,
+        flown.minutes_from_epoch() / 1440.0,
+        r / 1e3,
+        world::TLE_ALONG_TRACK_ERROR_M,
+    ))
 }
 
 fn metrics_of(m: &FlightMetrics, record: &run::FlightRecord, wall_s: f64) -> Metrics {

@@ -11,7 +11,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::gps::{Almanac, AlmanacEntry};
-use super::orbit::{Orbit, StateVector, OMEGA_EARTH, R_EARTH};
+use super::orbit::{StateVector, Trajectory, OMEGA_EARTH, R_EARTH};
 
 /// GPS L1 wavelength, m.
 pub const L1_WAVELENGTH_M: f64 = 299_792_458.0 / 1_575.42e6;
@@ -45,7 +45,7 @@ pub struct GpsView {
 #[derive(Clone, Debug)]
 pub struct SkyModel {
     /// The spacecraft's orbit.
-    pub orbit: Orbit,
+    pub orbit: Trajectory,
     /// The GPS almanac (healthy satellites are used).
     pub almanac: Almanac,
     /// GPS time of week at simulation time 0, s.
@@ -128,11 +128,12 @@ impl SkyModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::truth::orbit::Orbit;
 
     fn sky() -> SkyModel {
         let almanac = Almanac::bundled();
         SkyModel {
-            orbit: Orbit::sun_synchronous(550e3, 0.3, 0.0),
+            orbit: Orbit::sun_synchronous(550e3, 0.3, 0.0).into(),
             gps_time_of_week_s: almanac.reference_time_s(),
             almanac,
         }
