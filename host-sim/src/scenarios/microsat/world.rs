@@ -463,6 +463,37 @@ mod tests {
         );
     }
 
+    /// With a TLE the truth's orbit, the nadir frame and the sky are SGP4's (AO-73 at about
+    /// 635 km, not the built-in 550 km), and the flight computer's orbit is 1 km ahead along
+    /// the track: its lines of sight move by some 1 km / 20 000 km.
+    #[test]
+    fn a_tle_replaces_the_orbit_everywhere_and_the_onboard_copy_is_1_km_ahead() {
+        let tle = Tle::parse(include_str!("../../../data/ao73.tle")).unwrap();
+        let mut w = World::new(MotionKind::Nadir, 0.4, 3600.0, [0.0; 3]);
+        w.fly_tle(&tle, 600.0).unwrap();
+        let gps_start = f64::from(BUNDLED_ALMANAC_WEEK) * WEEK_S + w.sky.gps_time_of_week_s;
+        let flown = TleOrbit::new(tle, gps_start, 600.0).unwrap();
+        for t in [0.0, 300.0, 600.0] {
+            let r = w.sky.receiver(t).r;
+            assert!((r - flown.eci(t).r).norm() < 1e-6);
+            let altitude = r.norm() - crate::truth::orbit::R_EARTH;
+            assert!((600e3..680e3).contains(&altitude), "{altitude} m");
+            let z_body = w.motion.q_ib(t).rotate(&Vector3::z());
+            // nadir up to the 4° wobble
+            assert!(z_body.dot(&-r.normalize()) > 4.5f64.to_radians().cos());
+            let along = w.navigation.position_error(t);
+            let v = w.sky.receiver(t).v;
+            assert!((along.norm() - TLE_ALONG_TRACK_ERROR_M).abs() < 5.0, "{along}");
+            assert!(along.normalize().dot(&v.normalize()) > 0.999);
+        }
+        let truth = w.sky.views(100.0);
+        let predicted = w.navigation_views(100.0);
+        for (a, b) in truth.iter().zip(&predicted).filter(|(a, _)| !a.occulted) {
+            let angle = a.los.cross(&b.los).norm();
+            assert!(angle < 2.0 * TLE_ALONG_TRACK_ERROR_M / 1.9e7, "PRN {}: {angle}", a.prn);
+        }
+    }
+
     #[test]
     fn the_zenith_antennas_see_a_leo_sky_with_enough_satellites() {
         let w = World::new(MotionKind::Nadir, 0.0, 0.0, [0.0; 3]);
