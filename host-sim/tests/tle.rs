@@ -43,16 +43,21 @@ fn the_main_job_flies_a_tle_orbit_with_own_fixes_and_the_usual_attitude_accuracy
         nav.fix_errors.len()
     );
     let worst = nav.fix_errors.iter().map(|e| e.1).fold(0.0, f64::max);
-    let rms = (nav.fix_errors.iter().map(|e| e.1 * e.1).sum::<f64>()
-        / nav.fix_errors.len() as f64)
+    let rms = (nav.fix_errors.iter().map(|e| e.1 * e.1).sum::<f64>() / nav.fix_errors.len() as f64)
         .sqrt();
-    assert!(worst < 15.0 && rms < 5.0, "fix error RMS {rms} m, worst {worst} m");
+    assert!(
+        worst < 15.0 && rms < 5.0,
+        "fix error RMS {rms} m, worst {worst} m"
+    );
 
     // attitude: on the default orbit the short flight's RMS is 0.007–0.010° per axis; the
     // TLE's orbit must not cost accuracy (each axis within 0.02°, and the receiver never
     // lost for long)
     let rms_deg = m.receiver.rms.map(f64::to_degrees);
-    assert!(rms_deg.iter().all(|&x| x < 0.02), "attitude RMS {rms_deg} deg");
+    assert!(
+        rms_deg.iter().all(|&x| x < 0.02),
+        "attitude RMS {rms_deg} deg"
+    );
     assert!(m.availability > 0.95, "availability {}", m.availability);
     println!(
         "TLE flight: first fix {first:.1} s, {} fixes, RMS {rms:.2} m (worst {worst:.2} m); attitude RMS {:.4} / {:.4} / {:.4} deg",

@@ -376,7 +376,7 @@ crate::metrics! {
 fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
     let started = std::time::Instant::now();
     if let Some(tle) = &config.tle {
-        eprintln!("host-sim: {}", orbit_note(tle)?);
+        eprintln!("host-sim: {}", orbit_note(tle, config)?);
     }
     let bar = crate::report::progress(config.duration_s as u64, "flight (s)");
     let record = fly(config, Some(&bar))?;
@@ -408,11 +408,8 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
 
 /// Where a `--tle` orbit comes from and how far it was propagated (stderr: the JSON has no
 /// place for a name).
-fn orbit_note(tle: &crate::truth::tle::Tle) -> Result<String> {
-    let world = world::World::new(MotionKind::Nadir, 0.0, nadir(1).gps_offset_s, [0.0; 3]);
-    let gps_start_s =
-        f64::from(crate::synth::lnav::BUNDLED_ALMANAC_WEEK) * crate::truth::gps::WEEK_S
-            + world.sky.gps_time_of_week_s;
+fn orbit_note(tle: &crate::truth::tle::Tle, config: &FlightConfig) -> Result<String> {
+    let gps_start_s = world::gps_start_s(config.gps_offset_s);
     let flown = crate::truth::tle::TleOrbit::new(tle.clone(), gps_start_s, 0.0)?;
     let r = flown.ecef(0.0).r.norm() - crate::truth::orbit::R_EARTH;
     Ok(format!(

@@ -3,7 +3,8 @@
 //! rate, and whether the Earth hides them.
 //!
 //! Frames and time: the simulation's ECI frame is the ECEF frame frozen at `t = 0`
-//! ([`Orbit`]'s `gmst0 = 0`); simulation time `t` (s) is GPS time of week
+//! ([`Orbit`](super::orbit::Orbit)'s `gmst0 = 0`, or a TLE's [`super::tle::TleOrbit`]);
+//! simulation time `t` (s) is GPS time of week
 //! `gps_time_of_week_s + t` for the almanac. The geometry is instantaneous (no light-time
 //! correction): the ~70 ms signal flight shifts ranges by a smooth few tens of metres, which
 //! is common to the antennas and irrelevant to attitude.

@@ -63,7 +63,10 @@ impl std::fmt::Display for TleError {
         match self {
             Self::Read { path, source } => write!(f, "reading {}: {source}", path.display()),
             Self::MissingLines => {
-                write!(f, "no two-line element set (a line '1 …' then a line '2 …')")
+                write!(
+                    f,
+                    "no two-line element set (a line '1 …' then a line '2 …')"
+                )
             }
             Self::Parse(e) => write!(f, "TLE: {e}"),
             Self::Elements(e) => write!(f, "TLE elements: {e}"),
@@ -117,8 +120,9 @@ impl Tle {
             .map(|j| lines[j].trim())
             .filter(|n| !n.is_empty() && !n.starts_with('#'))
             .map(|n| n.trim_start_matches("0 ").to_string());
-        let elements = sgp4::Elements::from_tle(name.clone(), lines[i].as_bytes(), line2.as_bytes())
-            .map_err(TleError::Parse)?;
+        let elements =
+            sgp4::Elements::from_tle(name.clone(), lines[i].as_bytes(), line2.as_bytes())
+                .map_err(TleError::Parse)?;
         let constants = sgp4::Constants::from_elements(&elements).map_err(TleError::Elements)?;
         Ok(Self {
             name,
@@ -226,7 +230,7 @@ pub struct TleOrbit {
 
 impl TleOrbit {
     /// `tle` flown from GPS time `gps_start_s` (s since the GPS epoch) for `duration_s`:
-    /// SGP4 is checked every [`CHECK_STEP_S`] over the flight and a minute beyond either end.
+    /// SGP4 is checked every 10 s over the flight and a minute beyond either end.
     ///
     /// # Errors
     /// [`TleError::Propagation`] where SGP4 fails.
@@ -312,7 +316,10 @@ mod tests {
             let teme = tle.teme((utc - epoch) / 60.0).unwrap();
             let ecef = tle.ecef(utc).unwrap();
             let r = ecef.r.norm();
-            assert!((r - teme.r.norm()).abs() < 1e-6, "rotation changed the radius");
+            assert!(
+                (r - teme.r.norm()).abs() < 1e-6,
+                "rotation changed the radius"
+            );
             // within the eccentric orbit's radii (plus SGP4's few-km short-period terms)
             assert!(
                 r > a * (1.0 - e) - 15e3 && r < a * (1.0 + e) + 15e3,
@@ -331,7 +338,10 @@ mod tests {
             let w = Vector3::new(0.0, 0.0, OMEGA_EARTH);
             let by_hand = (teme.v - w.cross(&teme.r)).norm();
             assert!((ecef.v.norm() - by_hand).abs() < 1e-6);
-            assert!((ecef.v.norm() - teme.v.norm()).abs() > 1.0, "no Earth rotation");
+            assert!(
+                (ecef.v.norm() - teme.v.norm()).abs() > 1.0,
+                "no Earth rotation"
+            );
             let h = 0.5;
             let d = (tle.ecef(utc + h).unwrap().r - tle.ecef(utc - h).unwrap().r) / (2.0 * h);
             assert!((d - ecef.v).norm() < 0.05, "{}", (d - ecef.v).norm());

@@ -336,7 +336,7 @@ impl World {
     /// # Errors
     /// SGP4 fails somewhere in the flight.
     pub fn fly_tle(&mut self, tle: &Tle, duration_s: f64) -> Result<(), TleError> {
-        let gps_start_s = f64::from(BUNDLED_ALMANAC_WEEK) * WEEK_S + self.sky.gps_time_of_week_s;
+        let gps_start_s = gps_week_start_s() + self.sky.gps_time_of_week_s;
         let flown = TleOrbit::new(tle.clone(), gps_start_s, duration_s)?;
         let speed = flown.eci(0.0).v.norm();
         let orbit = Trajectory::Tle(Box::new(flown));
@@ -414,6 +414,17 @@ impl World {
     }
 }
 
+/// The start of the bundled almanac's GPS week, s since the GPS epoch.
+fn gps_week_start_s() -> f64 {
+    f64::from(BUNDLED_ALMANAC_WEEK) * WEEK_S
+}
+
+/// A flight's GPS start, s since the GPS epoch (1980-01-06): the bundled almanac's time of
+/// applicability plus `gps_offset_s` (what [`World::new`] flies).
+pub fn gps_start_s(gps_offset_s: f64) -> f64 {
+    gps_week_start_s() + Almanac::bundled().reference_time_s() + gps_offset_s
+}
+
 /// Which attitude history.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MotionKind {
@@ -471,8 +482,7 @@ mod tests {
         let tle = Tle::parse(include_str!("../../../data/ao73.tle")).unwrap();
         let mut w = World::new(MotionKind::Nadir, 0.4, 3600.0, [0.0; 3]);
         w.fly_tle(&tle, 600.0).unwrap();
-        let gps_start = f64::from(BUNDLED_ALMANAC_WEEK) * WEEK_S + w.sky.gps_time_of_week_s;
-        let flown = TleOrbit::new(tle, gps_start, 600.0).unwrap();
+        let flown = TleOrbit::new(tle, gps_start_s(3600.0), 600.0).unwrap();
         for t in [0.0, 300.0, 600.0] {
             let r = w.sky.receiver(t).r;
             assert!((r - flown.eci(t).r).norm() < 1e-6);
@@ -483,14 +493,21 @@ mod tests {
             assert!(z_body.dot(&-r.normalize()) > 4.5f64.to_radians().cos());
             let along = w.navigation.position_error(t);
             let v = w.sky.receiver(t).v;
-            assert!((along.norm() - TLE_ALONG_TRACK_ERROR_M).abs() < 5.0, "{along}");
+            assert!(
+                (along.norm() - TLE_ALONG_TRACK_ERROR_M).abs() < 5.0,
+                "{along}"
+            );
             assert!(along.normalize().dot(&v.normalize()) > 0.999);
         }
         let truth = w.sky.views(100.0);
         let predicted = w.navigation_views(100.0);
         for (a, b) in truth.iter().zip(&predicted).filter(|(a, _)| !a.occulted) {
             let angle = a.los.cross(&b.los).norm();
-            assert!(angle < 2.0 * TLE_ALONG_TRACK_ERROR_M / 1.9e7, "PRN {}: {angle}", a.prn);
+            assert!(
+                angle < 2.0 * TLE_ALONG_TRACK_ERROR_M / 1.9e7,
+                "PRN {}: {angle}",
+                a.prn
+            );
         }
     }
 
