@@ -2,8 +2,8 @@
 //! 635 km instead of the built-in 550 km orbit). A two-minute flight without faults from the
 //! scenario's GPS start: the receiver decodes its ephemerides, fixes its position on the TLE's
 //! orbit and keeps the attitude at the accuracy of the built-in orbit. Heavy (the first
-//! seconds from samples): CI runs it in release. The refusal for a scenario without an orbit
-//! is fast.
+//! seconds from samples): run it in release with `--ignored`. The refusal for a scenario
+//! without an orbit is fast.
 
 use std::path::PathBuf;
 
@@ -20,7 +20,7 @@ fn bundled() -> Tle {
 }
 
 #[test]
-#[ignore = "heavy: CI runs it in release"]
+#[ignore = "heavy: cargo test --release -p host-sim --test tle -- --ignored"]
 fn the_main_job_flies_a_tle_orbit_with_own_fixes_and_the_usual_attitude_accuracy() {
     let config = FlightConfig {
         duration_s: 120.0,
