@@ -7,9 +7,9 @@
 //!   with the leap seconds of the almanac's date ([`GPS_MINUS_UTC_S`]); UT1 = UTC (|UT1 − UTC|
 //!   < 0.9 s: a rotation of the whole ECEF orbit by < 66 µrad about the pole).
 //! * **TEME → ECEF**: `r_e = R_z(−θ) r_teme`, `v_e = R_z(−θ) v_teme − ω⊕ × r_e` with `θ` the
-//!   Greenwich mean sidereal time (IAU 1982, the `sgp4` crate's); the equation of the
-//!   equinoxes is not added (TEME's x axis is the mean equinox) and **polar motion is
-//!   ignored** (a few metres at the surface, tens of µrad in attitude-irrelevant geometry).
+//!   Greenwich mean sidereal time (IAU 1982, the `sgp4` crate's; GMST, not the apparent
+//!   time, as TEME's mean equinox requires) and **polar motion is ignored** (about 0.3″ =
+//!   1.5 µrad: some 10 m at the orbit's radius, the same for the GPS satellites' frame).
 //! * **ECEF → the simulation's ECI** ([`super::sky`]: the ECEF frame frozen at `t = 0`):
 //!   `r_i = R_z(ω⊕ t) r_e`, `v_i = R_z(ω⊕ t)(v_e + ω⊕ × r_e)`, the rotation the GPS
 //!   satellites get in [`super::sky::SkyModel::satellite`].
