@@ -39,6 +39,7 @@ fn scenario(variant: &str, runs: usize, duration: f64) -> Value {
         seed: 7,
         out_dir: None,
         front_end: host_sim::synth::quantize::Quantizer::I8,
+        tle: None,
     };
     let outcome = run_plan(&ctx, runs, duration).unwrap();
     Value::Object(outcome.metrics)

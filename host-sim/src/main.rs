@@ -68,6 +68,10 @@ enum Command {
         /// (scenario microsat).
         #[arg(long)]
         nmea: Option<PathBuf>,
+        /// Fly this two-line (or three-line, with the name) element set through SGP4 instead
+        /// of the built-in orbit, from the scenario's GPS start (scenario microsat).
+        #[arg(long)]
+        tle: Option<PathBuf>,
     },
     /// Acquisition on the first milliseconds of a recorded sample file.
     Acquire {
@@ -336,8 +340,15 @@ fn main() -> ExitCode {
             out,
             front_end,
             nmea,
+            tle,
         }) => with_nmea(nmea.as_deref(), || {
-            run(&scenario, variant.as_deref(), seed, json, out, front_end)
+            let options = RunOptions {
+                json,
+                out,
+                front_end,
+                tle,
+            };
+            run(&scenario, variant.as_deref(), seed, options)
         }),
         Some(Command::Acquire { file, search, json }) => acquire(&file, &search, json),
         Some(Command::Track(args)) => track_command(args),
@@ -354,9 +365,12 @@ fn main() -> ExitCode {
             scenarios::DEFAULT_SCENARIO,
             None,
             1,
-            false,
-            Some(PathBuf::from("out")),
-            Quantizer::I8,
+            RunOptions {
+                json: false,
+                out: Some(PathBuf::from("out")),
+                front_end: Quantizer::I8,
+                tle: None,
+            },
         ),
     };
     match result {
@@ -498,16 +512,26 @@ fn parse_front_end(s: &str) -> Result<Quantizer, String> {
     Quantizer::parse(s).map_err(|e| e.to_string())
 }
 
-fn run(
-    name: &str,
-    variant: Option<&str>,
-    seed: u64,
+/// `host-sim run`'s options beside the scenario, variant and seed.
+struct RunOptions {
     json: bool,
     out: Option<PathBuf>,
     front_end: Quantizer,
-) -> anyhow::Result<()> {
+    tle: Option<PathBuf>,
+}
+
+fn run(name: &str, variant: Option<&str>, seed: u64, options: RunOptions) -> anyhow::Result<()> {
+    let RunOptions {
+        json,
+        out,
+        front_end,
+        tle,
+    } = options;
     let scenario = scenarios::find(name)?;
     let variant = scenario.variant(variant)?;
+    let tle = tle
+        .map(|p| host_sim::truth::tle::Tle::read(&p))
+        .transpose()?;
     if let Some(dir) = &out {
         std::fs::create_dir_all(dir)?;
     }
@@ -516,6 +540,7 @@ fn run(
         seed,
         out_dir: out,
         front_end,
+        tle,
     };
     let outcome = scenario.run(&ctx)?;
     let document = outcome.to_json(scenario.name, variant, seed);

@@ -28,6 +28,9 @@ pub struct RunContext {
     /// in [`FRONT_END_SCENARIOS`](crate::scenarios::FRONT_END_SCENARIOS) take another than
     /// `i8`).
     pub front_end: Quantizer,
+    /// A TLE to fly instead of the scenario's built-in orbit (`--tle`; only the scenarios in
+    /// [`TLE_SCENARIOS`](crate::scenarios::TLE_SCENARIOS)).
+    pub tle: Option<crate::truth::tle::Tle>,
 }
 
 /// What a scenario run produced.

@@ -101,6 +101,7 @@ fn run_one(scenario: &str, variant: &str) -> Result<Section> {
             seed: SEED,
             out_dir: None,
             front_end: Quantizer::I8,
+            tle: None,
         })
         .with_context(|| format!("running {} / {variant}", sc.name))?;
     Ok(Section {

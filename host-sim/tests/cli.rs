@@ -97,3 +97,24 @@ fn front_end_is_refused_where_there_are_no_samples() {
         "-iq variants have no samples",
     );
 }
+
+#[test]
+fn tle_is_refused_without_an_orbit_and_a_bad_file_says_why() {
+    let refused = |args: &[&str], message: &str| {
+        let out = host_sim().args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} ran");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(message), "{args:?}: {err}");
+    };
+    let tle = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ao73.tle");
+    refused(
+        &["run", "vector-ekf", "--tle", tle],
+        "scenario vector-ekf cannot use --tle (only microsat)",
+    );
+    refused(&["run", "microsat", "--tle", "/nonexistent.tle"], "reading");
+    let not_a_tle = concat!(env!("CARGO_MANIFEST_DIR"), "/data/README.md");
+    refused(
+        &["run", "microsat", "--tle", not_a_tle],
+        "no two-line element set",
+    );
+}

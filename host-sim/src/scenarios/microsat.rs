@@ -61,7 +61,16 @@ pub const SCENARIO: Scenario = Scenario {
                 truth_aiding,
             ),
         ],
-        run: |flight, ctx| run(&flight(ctx.seed), ctx),
+        run: |flight, ctx| {
+            run(
+                &FlightConfig {
+                    tle: ctx.tle.clone(),
+                    front_end: ctx.front_end,
+                    ..flight(ctx.seed)
+                },
+                ctx,
+            )
+        },
     },
 };
 
@@ -184,6 +193,7 @@ pub fn nadir(seed: u64) -> FlightConfig {
         nmea: true,
         aiding: AidingSource::Own,
         front_end: Quantizer::I8,
+        tle: None,
     }
 }
 
@@ -370,11 +380,10 @@ crate::metrics! {
 }
 
 fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
-    let config = &FlightConfig {
-        front_end: ctx.front_end,
-        ..config.clone()
-    };
     let started = std::time::Instant::now();
+    if let Some(tle) = &config.tle {
+        eprintln!("host-sim: {}", orbit_note(tle, config)?);
+    }
     let bar = crate::report::progress(config.duration_s as u64, "flight (s)");
     let record = fly(config, Some(&bar))?;
     bar.finish_and_clear();
@@ -401,6 +410,23 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
         o.files = files::write_all(dir, &record, &m, &title, &o.summary)?;
     }
     Ok(o)
+}
+
+/// Where a `--tle` orbit comes from and how far it was propagated (stderr: the JSON has no
+/// place for a name).
+fn orbit_note(tle: &crate::truth::tle::Tle, config: &FlightConfig) -> Result<String> {
+    let gps_start_s = world::gps_start_s(config.gps_offset_s);
+    let flown = crate::truth::tle::TleOrbit::new(tle.clone(), gps_start_s, 0.0)?;
+    let r = flown.ecef(0.0).r.norm() - crate::truth::orbit::R_EARTH;
+    Ok(format!(
+        "orbit: TLE {} (NORAD {}, epoch {} UTC), SGP4 propagated {:+.2} days from its epoch to the flight's GPS start (the almanac's), radius − R⊕ {:.1} km at t = 0; TEME → ECEF by GMST, polar motion ignored; the flight computer's copy is {} m ahead along the track",
+        tle.label(),
+        tle.elements.norad_id,
+        tle.elements.datetime,
+        flown.minutes_from_epoch() / 1440.0,
+        r / 1e3,
+        world::TLE_ALONG_TRACK_ERROR_M,
+    ))
 }
 
 fn metrics_of(

@@ -37,6 +37,34 @@ pub const SCENARIOS: &[Scenario] = &[
 /// The scenarios whose sample-level path takes `--front-end` other than `i8`.
 pub const FRONT_END_SCENARIOS: &[&str] = &["signal", "one-stage", "microsat"];
 
+/// The scenarios that fly a TLE (`--tle`) instead of their built-in orbit.
+pub const TLE_SCENARIOS: &[&str] = &["microsat"];
+
+/// A run option the scenario cannot use (`--tle` for a scenario without an orbit to replace).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnsupportedOption {
+    /// The scenario asked.
+    pub scenario: &'static str,
+    /// The option, as on the command line.
+    pub option: &'static str,
+    /// The scenarios that take it.
+    pub supported: &'static [&'static str],
+}
+
+impl std::fmt::Display for UnsupportedOption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "scenario {} cannot use {} (only {})",
+            self.scenario,
+            self.option,
+            self.supported.join(", ")
+        )
+    }
+}
+
+impl std::error::Error for UnsupportedOption {}
+
 /// What `host-sim` runs when called without arguments.
 pub const DEFAULT_SCENARIO: &str = "microsat";
 
@@ -145,7 +173,8 @@ impl Scenario {
     /// Runs the variant `ctx.variant`.
     ///
     /// # Errors
-    /// No such variant, or the run's own error.
+    /// No such variant, an option the scenario cannot use ([`UnsupportedOption`] for
+    /// `--tle`), or the run's own error.
     pub fn run(&self, ctx: &RunContext) -> anyhow::Result<Outcome> {
         if ctx.front_end != Quantizer::I8 && !FRONT_END_SCENARIOS.contains(&self.name) {
             bail!(
@@ -154,6 +183,14 @@ impl Scenario {
                 ctx.front_end,
                 FRONT_END_SCENARIOS.join(", ")
             );
+        }
+        if ctx.tle.is_some() && !TLE_SCENARIOS.contains(&self.name) {
+            return Err(UnsupportedOption {
+                scenario: self.name,
+                option: "--tle",
+                supported: TLE_SCENARIOS,
+            }
+            .into());
         }
         self.variants.run(ctx)
     }
@@ -193,6 +230,7 @@ pub fn run_front_end(
         seed,
         out_dir: None,
         front_end,
+        tle: None,
     })
 }
 

@@ -7,7 +7,7 @@
 use gnss_attitude::geometry::Quaternion;
 use nalgebra::{Matrix3, Vector3};
 
-use super::orbit::{lvlh_to_frame, Orbit};
+use super::orbit::{lvlh_to_frame, Trajectory};
 
 /// A truth attitude history.
 pub trait AttitudeTruth: Sync {
@@ -25,10 +25,10 @@ pub trait AttitudeTruth: Sync {
 
 /// Nadir pointing (body frame aligned with LVLH: z to nadir) with a slow tumble relative to it:
 /// a constant spin about body z plus a sinusoidal wobble of roll and pitch.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct NadirTumble {
     /// The orbit, which defines LVLH.
-    pub orbit: Orbit,
+    pub orbit: Trajectory,
     /// Spin about the body z axis relative to LVLH, rad/s.
     pub spin_rate: f64,
     /// Amplitude of the roll and pitch wobble, rad.
@@ -133,12 +133,13 @@ impl AttitudeTruth for DetumblingBody {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::truth::orbit::Orbit;
 
     #[test]
     fn nadir_tumble_points_z_to_nadir_up_to_the_wobble() {
         let orbit = Orbit::sun_synchronous(550e3, 0.0, 0.0);
         let truth = NadirTumble {
-            orbit,
+            orbit: orbit.into(),
             spin_rate: 0.01,
             wobble: 0.0,
             wobble_period: 100.0,

@@ -318,7 +318,7 @@ mod tests {
     #[test]
     fn noiseless_gyro_integrates_rate_plus_the_error_model_and_pulses_lose_nothing() {
         let truth = NadirTumble {
-            orbit: Orbit::sun_synchronous(550e3, 0.0, 0.0),
+            orbit: Orbit::sun_synchronous(550e3, 0.0, 0.0).into(),
             spin_rate: 0.02,
             wobble: 0.05,
             wobble_period: 60.0,

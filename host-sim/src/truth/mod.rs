@@ -12,6 +12,7 @@
 //! * [`tumble`]: a torque-free tumbling body with a MEMS gyro and a noisy attitude reference
 //!   (paper 001's `gnss-ref` variant).
 //! * [`gps`]: the GPS constellation from a YUMA almanac; elevation, azimuth, line of sight.
+//! * [`tle`]: an orbit from a two-line element set (SGP4, TEME → ECEF → the simulation frame).
 
 pub mod attitude;
 pub mod gps;
@@ -19,4 +20,5 @@ pub mod gyro;
 pub mod kinematics;
 pub mod orbit;
 pub mod sky;
+pub mod tle;
 pub mod tumble;

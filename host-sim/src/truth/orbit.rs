@@ -129,6 +129,49 @@ impl Orbit {
     }
 }
 
+/// The spacecraft's orbit: the built-in Keplerian one with secular J2, or SGP4 of a TLE
+/// ([`super::tle`]). Both give the simulation's ECI frame (the ECEF frame frozen at `t = 0`:
+/// Greenwich angle [`OMEGA_EARTH`]` t` for a TLE, `gmst0 + `[`OMEGA_EARTH`]` t` for [`Orbit`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Trajectory {
+    /// Keplerian elements with secular J2 (the scenarios' built-in orbits).
+    Kepler(Orbit),
+    /// SGP4 of a two-line element set (`--tle`).
+    Tle(Box<super::tle::TleOrbit>),
+}
+
+impl From<Orbit> for Trajectory {
+    fn from(o: Orbit) -> Self {
+        Self::Kepler(o)
+    }
+}
+
+impl Trajectory {
+    /// Position and velocity in ECI at `t` seconds, m and m/s.
+    pub fn eci(&self, t: f64) -> StateVector {
+        match self {
+            Self::Kepler(o) => o.eci(t),
+            Self::Tle(o) => o.eci(t),
+        }
+    }
+
+    /// Position and velocity in ECEF at `t` seconds, m and m/s.
+    pub fn ecef(&self, t: f64) -> StateVector {
+        match self {
+            Self::Kepler(o) => o.ecef(t),
+            Self::Tle(o) => o.ecef(t),
+        }
+    }
+
+    /// Greenwich angle of the simulation's ECI frame at `t` (ECI = `R_z(θ)` ECEF), rad.
+    pub fn gmst(&self, t: f64) -> f64 {
+        match self {
+            Self::Kepler(o) => o.gmst(t),
+            Self::Tle(_) => OMEGA_EARTH * t,
+        }
+    }
+}
+
 /// ECI → ECEF for Greenwich angle `gmst` (rad): `r_e = R_z(−θ) r_i`,
 /// `v_e = R_z(−θ) (v_i − ω⊕ × r_i)`.
 pub fn eci_to_ecef(s: &StateVector, gmst: f64) -> StateVector {

@@ -3,7 +3,8 @@
 //! rate, and whether the Earth hides them.
 //!
 //! Frames and time: the simulation's ECI frame is the ECEF frame frozen at `t = 0`
-//! ([`Orbit`]'s `gmst0 = 0`); simulation time `t` (s) is GPS time of week
+//! ([`Orbit`](super::orbit::Orbit)'s `gmst0 = 0`, or a TLE's [`super::tle::TleOrbit`]);
+//! simulation time `t` (s) is GPS time of week
 //! `gps_time_of_week_s + t` for the almanac. The geometry is instantaneous (no light-time
 //! correction): the ~70 ms signal flight shifts ranges by a smooth few tens of metres, which
 //! is common to the antennas and irrelevant to attitude.
@@ -11,7 +12,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::gps::{Almanac, AlmanacEntry};
-use super::orbit::{Orbit, StateVector, OMEGA_EARTH, R_EARTH};
+use super::orbit::{StateVector, Trajectory, OMEGA_EARTH, R_EARTH};
 
 /// GPS L1 wavelength, m.
 pub const L1_WAVELENGTH_M: f64 = 299_792_458.0 / 1_575.42e6;
@@ -45,7 +46,7 @@ pub struct GpsView {
 #[derive(Clone, Debug)]
 pub struct SkyModel {
     /// The spacecraft's orbit.
-    pub orbit: Orbit,
+    pub orbit: Trajectory,
     /// The GPS almanac (healthy satellites are used).
     pub almanac: Almanac,
     /// GPS time of week at simulation time 0, s.
@@ -128,11 +129,12 @@ impl SkyModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::truth::orbit::Orbit;
 
     fn sky() -> SkyModel {
         let almanac = Almanac::bundled();
         SkyModel {
-            orbit: Orbit::sun_synchronous(550e3, 0.3, 0.0),
+            orbit: Orbit::sun_synchronous(550e3, 0.3, 0.0).into(),
             gps_time_of_week_s: almanac.reference_time_s(),
             almanac,
         }

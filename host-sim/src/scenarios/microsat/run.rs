@@ -25,6 +25,7 @@ use crate::synth::quantize::Quantizer;
 use crate::truth::attitude::AttitudeTruth;
 use crate::truth::gyro::{Gyro, GyroErrors};
 use crate::truth::sky::GpsView;
+use crate::truth::tle::Tle;
 use gnss_attitude::receiver::{AdapterConfig, NoiseFloor};
 use gnss_attitude::signal::correlator::{EpochCorrelations, Iq, Taps};
 use gnss_attitude::signal::Prn;
@@ -132,6 +133,8 @@ pub struct FlightConfig {
     /// searches' too, and its emulated correlators' C/N0 lowered by
     /// [`Quantizer::theory_loss_db`].
     pub front_end: Quantizer,
+    /// A TLE flown instead of the built-in orbit (`--tle`; [`World::fly_tle`]).
+    pub tle: Option<Tle>,
 }
 
 /// One record (every [`RECORD_S`]).
@@ -394,6 +397,9 @@ impl<'a> Flight<'a> {
         }
         world.line_bias = LineBiasTruth::power_up(config.seed ^ LINE_BIAS_SEED_SALT);
         world.navigation = NavigationError::draw(config.seed ^ NAVIGATION_SEED_SALT);
+        if let Some(tle) = &config.tle {
+            world.fly_tle(tle, config.duration_s)?;
+        }
         let navigation = Navigation::new(&world, config.seed ^ OWN_NAVIGATION_SEED_SALT)?;
         let rcfg = receiver_config(&world, config.loop_bandwidth_hz);
         let rx = Box::new(

@@ -5,11 +5,13 @@
 use gnss_attitude::geometry::Quaternion;
 use nalgebra::{Matrix3, Vector3};
 
+use crate::synth::lnav::BUNDLED_ALMANAC_WEEK;
 use crate::synth::quantize::Quantizer;
 use crate::truth::attitude::{AttitudeTruth, DetumblingBody, NadirTumble};
-use crate::truth::gps::Almanac;
-use crate::truth::orbit::Orbit;
+use crate::truth::gps::{Almanac, WEEK_S};
+use crate::truth::orbit::{Orbit, Trajectory};
 use crate::truth::sky::{GpsView, SkyModel, L1_WAVELENGTH_M};
+use crate::truth::tle::{Tle, TleError, TleOrbit};
 
 /// Side of the antenna triangle, m.
 pub const TRIANGLE_SIDE_M: f64 = 0.5;
@@ -115,6 +117,20 @@ pub const NAV_VELOCITY_SIGMA_M_S: f64 = 0.05;
 pub const EPHEMERIS_POSITION_SIGMA_M: f64 = 2.0;
 /// Period of the onboard orbit error's slow oscillation (once per orbit), s.
 pub const NAV_ERROR_PERIOD_S: f64 = 5_700.0;
+/// Along-track error of the flight computer's copy of a TLE (`--tle`), m: its orbit is the
+/// truth's TLE this far ahead (a fresh TLE's typical error is of order 1 km, mostly along
+/// the track).
+pub const TLE_ALONG_TRACK_ERROR_M: f64 = 1_000.0;
+
+/// The flight computer's own orbit when it propagates a TLE: the truth's trajectory
+/// `ahead_s` later (an along-track error of [`TLE_ALONG_TRACK_ERROR_M`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OnboardOrbit {
+    /// The trajectory it propagates.
+    pub orbit: Trajectory,
+    /// How far ahead along it the onboard copy is, s.
+    pub ahead_s: f64,
+}
 
 /// What the flight computer's navigation gets wrong: its own orbit (a position error that
 /// oscillates once per orbit, and a velocity error) and each GPS satellite's ephemeris position
@@ -129,6 +145,9 @@ pub struct NavigationError {
     pub velocity_m_s: [f64; 3],
     /// Ephemeris position error per PRN (index PRN − 1), ECI, m.
     pub ephemeris_m: Vec<[f64; 3]>,
+    /// The onboard TLE (`--tle`): when present, its error replaces the drawn orbit error
+    /// (`position_m`, `phase_rad`, `velocity_m_s`); the ephemeris errors stay.
+    pub onboard: Option<OnboardOrbit>,
 }
 
 impl NavigationError {
@@ -139,6 +158,7 @@ impl NavigationError {
             phase_rad: [0.0; 3],
             velocity_m_s: [0.0; 3],
             ephemeris_m: vec![[0.0; 3]; 32],
+            onboard: None,
         }
     }
 
@@ -163,13 +183,25 @@ impl NavigationError {
             phase_rad,
             velocity_m_s,
             ephemeris_m,
+            onboard: None,
         }
     }
 
     /// The onboard orbit's position error at `t`, ECI, m.
     pub fn position_error(&self, t: f64) -> Vector3<f64> {
+        if let Some(o) = &self.onboard {
+            return o.orbit.eci(t + o.ahead_s).r - o.orbit.eci(t).r;
+        }
         let w = std::f64::consts::TAU / NAV_ERROR_PERIOD_S;
         Vector3::from([0, 1, 2].map(|i| self.position_m[i] * (w * t + self.phase_rad[i]).sin()))
+    }
+
+    /// The onboard orbit's velocity error at `t`, ECI, m/s.
+    pub fn velocity_error(&self, t: f64) -> Vector3<f64> {
+        match &self.onboard {
+            Some(o) => o.orbit.eci(t + o.ahead_s).v - o.orbit.eci(t).v,
+            None => Vector3::from(self.velocity_m_s),
+        }
     }
 
     /// `view` as the flight computer predicts it at `t`: line of sight, range and Doppler
@@ -182,7 +214,7 @@ impl NavigationError {
         let relative = view.los * view.range + ephemeris - self.position_error(t);
         let range = relative.norm();
         let los = relative / range;
-        let range_rate = view.range_rate - los.dot(&Vector3::from(self.velocity_m_s));
+        let range_rate = view.range_rate - los.dot(&self.velocity_error(t));
         GpsView {
             position: view.position + ephemeris,
             los,
@@ -273,7 +305,7 @@ impl World {
         let orbit = Orbit::sun_synchronous(ALTITUDE_M, 0.3, u0);
         let motion = match motion_kind {
             MotionKind::Nadir => Motion::Nadir(NadirTumble {
-                orbit,
+                orbit: orbit.into(),
                 spin_rate: 0.6f64.to_radians(),
                 wobble: 4f64.to_radians(),
                 wobble_period: 150.0,
@@ -294,7 +326,7 @@ impl World {
         };
         Self {
             sky: SkyModel {
-                orbit,
+                orbit: orbit.into(),
                 gps_time_of_week_s: almanac.reference_time_s() + gps_offset_s,
                 almanac,
             },
@@ -304,6 +336,31 @@ impl World {
             blockages: Vec::new(),
             navigation: NavigationError::none(),
         }
+    }
+
+    /// Flies `tle` instead of the built-in orbit: the truth's orbit (the sky's geometry, the
+    /// nadir frame, the pseudoranges) is SGP4 of the TLE from the flight's GPS start (kept:
+    /// the almanac's time of applicability plus the offset, so the constellation is the
+    /// almanac's; the TLE is propagated from its epoch to it) over `duration_s`; the flight
+    /// computer's orbit is the same TLE [`TLE_ALONG_TRACK_ERROR_M`] ahead ([`OnboardOrbit`]).
+    /// Call after drawing [`Self::navigation`].
+    ///
+    /// # Errors
+    /// SGP4 fails somewhere in the flight.
+    pub fn fly_tle(&mut self, tle: &Tle, duration_s: f64) -> Result<(), TleError> {
+        let gps_start_s = gps_week_start_s() + self.sky.gps_time_of_week_s;
+        let flown = TleOrbit::new(tle.clone(), gps_start_s, duration_s)?;
+        let speed = flown.eci(0.0).v.norm();
+        let orbit = Trajectory::Tle(Box::new(flown));
+        if let Motion::Nadir(m) = &mut self.motion {
+            m.orbit = orbit.clone();
+        }
+        self.sky.orbit = orbit.clone();
+        self.navigation.onboard = Some(OnboardOrbit {
+            orbit,
+            ahead_s: TLE_ALONG_TRACK_ERROR_M / speed,
+        });
+        Ok(())
     }
 
     /// The satellites' views at `t` as the flight computer predicts them (almanac and
@@ -369,6 +426,17 @@ impl World {
     }
 }
 
+/// The start of the bundled almanac's GPS week, s since the GPS epoch.
+fn gps_week_start_s() -> f64 {
+    f64::from(BUNDLED_ALMANAC_WEEK) * WEEK_S
+}
+
+/// A flight's GPS start, s since the GPS epoch (1980-01-06): the bundled almanac's time of
+/// applicability plus `gps_offset_s` (what [`World::new`] flies).
+pub fn gps_start_s(gps_offset_s: f64) -> f64 {
+    gps_week_start_s() + Almanac::bundled().reference_time_s() + gps_offset_s
+}
+
 /// Which attitude history.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MotionKind {
@@ -416,6 +484,43 @@ mod tests {
             largest < 10.0 * expected && largest > 0.1 * expected,
             "{largest} rad"
         );
+    }
+
+    /// With a TLE the truth's orbit, the nadir frame and the sky are SGP4's (AO-73 at about
+    /// 635 km, not the built-in 550 km), and the flight computer's orbit is 1 km ahead along
+    /// the track: its lines of sight move by some 1 km / 20 000 km.
+    #[test]
+    fn a_tle_replaces_the_orbit_everywhere_and_the_onboard_copy_is_1_km_ahead() {
+        let tle = Tle::parse(include_str!("../../../data/ao73.tle")).unwrap();
+        let mut w = World::new(MotionKind::Nadir, 0.4, 3600.0, [0.0; 3]);
+        w.fly_tle(&tle, 600.0).unwrap();
+        let flown = TleOrbit::new(tle, gps_start_s(3600.0), 600.0).unwrap();
+        for t in [0.0, 300.0, 600.0] {
+            let r = w.sky.receiver(t).r;
+            assert!((r - flown.eci(t).r).norm() < 1e-6);
+            let altitude = r.norm() - crate::truth::orbit::R_EARTH;
+            assert!((600e3..680e3).contains(&altitude), "{altitude} m");
+            let z_body = w.motion.q_ib(t).rotate(&Vector3::z());
+            // nadir up to the 4° wobble
+            assert!(z_body.dot(&-r.normalize()) > 4.5f64.to_radians().cos());
+            let along = w.navigation.position_error(t);
+            let v = w.sky.receiver(t).v;
+            assert!(
+                (along.norm() - TLE_ALONG_TRACK_ERROR_M).abs() < 5.0,
+                "{along}"
+            );
+            assert!(along.normalize().dot(&v.normalize()) > 0.999);
+        }
+        let truth = w.sky.views(100.0);
+        let predicted = w.navigation_views(100.0);
+        for (a, b) in truth.iter().zip(&predicted).filter(|(a, _)| !a.occulted) {
+            let angle = a.los.cross(&b.los).norm();
+            assert!(
+                angle < 2.0 * TLE_ALONG_TRACK_ERROR_M / 1.9e7,
+                "PRN {}: {angle}",
+                a.prn
+            );
+        }
     }
 
     #[test]
