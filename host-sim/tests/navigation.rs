@@ -2,7 +2,9 @@
 //! LNAV message (`synth --lnav`, thermal noise, 45 dB-Hz) tracked without a sky file. The
 //! decoded ephemerides are what the synthesizer encoded, the fixes lie within 10 m of the
 //! truth, the attitude from the fixes' lines of sight within 0.05°, and the time to the first
-//! fix is reported. Heavy (a minute of three-antenna samples): CI runs it in release.
+//! fix is reported. Heavy (a minute of three-antenna samples): run it with `cargo test
+//! --release -p host-sim --test navigation -- --ignored`; `.ci/run` checks the same experiment
+//! through the command line on a 50 s one-antenna recording (`.ci/check_navigation.jq`).
 
 use std::path::PathBuf;
 
@@ -33,7 +35,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 #[test]
-#[ignore = "heavy: CI runs it in release"]
+#[ignore = "heavy: cargo test --release -p host-sim --test navigation -- --ignored"]
 fn a_static_lnav_recording_gives_ephemerides_position_and_attitude_without_a_sky_file() {
     let dir = temp_dir("static");
     let spec = SynthSpec {
