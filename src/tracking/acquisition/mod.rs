@@ -247,14 +247,23 @@ pub struct SearchReport {
     pub interference: bool,
 }
 
-/// The acquisition engine with its fixed workspace (`N` bins per millisecond).
+/// Doppler bins that share one mix and forward FFT of each millisecond by default (the lanes
+/// of [`Acquisition`]): 2 keeps the engine at 46 KiB for `N = 1024`.
+pub const DEFAULT_LANES: usize = 2;
+
+/// The acquisition engine with its fixed workspace (`N` bins per millisecond; `L` lanes:
+/// Doppler bins of one sub-bin offset searched together from one FFT of each millisecond,
+/// `4·N` bytes each).
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Acquisition<const N: usize> {
+pub struct Acquisition<const N: usize, const L: usize = DEFAULT_LANES> {
     fft: Fft<N>,
     code: [Complex; N],
     data: [Complex; N],
-    power: [f32; N],
+    /// The spectrum product of one bin, then its correlation.
+    work: [Complex; N],
+    /// The non-coherent sums of the chunk's bins.
+    lanes: [[f32; N]; L],
     peaks: [(f32, u32); MAX_DOPPLER_BINS],
     /// Background line power of the samples' spectrum (interference excision; 0: none).
     level: f32,
@@ -266,13 +275,14 @@ pub struct Acquisition<const N: usize> {
     cancelled_count: usize,
 }
 
-impl<const N: usize> Acquisition<N> {
+impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// A new engine.
     ///
     /// # Errors
-    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192.
+    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192 and `L`
+    /// in 1–64.
     pub fn new() -> Result<Self, AcquisitionError> {
-        if !(1024..=8192).contains(&N) {
+        if !(1024..=8192).contains(&N) || !(1..=64).contains(&L) {
             return Err(AcquisitionError::InvalidConfig);
         }
         let fft = Fft::new().ok_or(AcquisitionError::InvalidConfig)?;
@@ -280,7 +290,8 @@ impl<const N: usize> Acquisition<N> {
             fft,
             code: [[0.0; 2]; N],
             data: [[0.0; 2]; N],
-            power: [0.0; N],
+            work: [[0.0; 2]; N],
+            lanes: [[0.0; N]; L],
             peaks: [(0.0, 0); MAX_DOPPLER_BINS],
             level: 0.0,
             tones: [tone::Tone::default(); tone::MAX_TONES],
