@@ -70,6 +70,23 @@ impl<const N: usize> Fft<N> {
             }
             len = 2;
         }
+        if len == 1 {
+            // The first radix-4 stage: twiddles all 1.
+            for quad in x.chunks_exact_mut(4) {
+                if let [a, b, c, d] = quad {
+                    let (t0, t2, t1, t3) = (*a, *b, *c, *d);
+                    let s02 = [t0[0] + t2[0], t0[1] + t2[1]];
+                    let d02 = [t0[0] - t2[0], t0[1] - t2[1]];
+                    let s13 = [t1[0] + t3[0], t1[1] + t3[1]];
+                    let r13 = [t1[1] - t3[1], t3[0] - t1[0]];
+                    *a = [s02[0] + s13[0], s02[1] + s13[1]];
+                    *b = [d02[0] + r13[0], d02[1] + r13[1]];
+                    *c = [s02[0] - s13[0], s02[1] - s13[1]];
+                    *d = [d02[0] - r13[0], d02[1] - r13[1]];
+                }
+            }
+            len = 4;
+        }
         // (at most log₄ N stages: len grows fourfold up to N)
         while len < N {
             let quarter = len;

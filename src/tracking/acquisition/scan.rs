@@ -4,8 +4,8 @@
 use super::cancel::MAX_CANCELLED;
 use super::tone::{rotate, MAX_TONES};
 use super::{
-    detection_threshold, Acquisition, AcquisitionConfig, Verification, FLOOR_GUARD_CHIPS,
-    MAX_DOPPLER_BINS, VERIFICATION_CODE_WINDOW_CHIPS, VERIFICATION_FALSE_ALARM,
+    Acquisition, AcquisitionConfig, Verification, FLOOR_GUARD_CHIPS, MAX_DOPPLER_BINS,
+    VERIFICATION_CODE_WINDOW_CHIPS, VERIFICATION_FALSE_ALARM,
 };
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};
 use crate::signal::nco::{carrier_index, CarrierNco, COS_TABLE, SIN_TABLE};
@@ -98,34 +98,31 @@ pub(super) struct Floor {
 impl Floor {
     /// Adds one Doppler bin's cells except those within `guard` bins of `peak_at`: f32 sums
     /// within the bin (the target has no double-precision unit), the squares scaled by the
-    /// bin's mean so that they stay far inside f32's range, f64 across bins.
+    /// bin's mean so that they stay far inside f32's range, f64 across bins. The background
+    /// is the circular run of `n − 2·guard − 1` cells after the guard band: two slices,
+    /// no test per cell.
     fn add_bin(&mut self, power: &[f32], peak_at: usize, guard: usize) {
         let n = power.len();
-        let background = |l: usize| {
-            let d = l.abs_diff(peak_at);
-            circular(d, n) > guard
+        let Some(len) = n.checked_sub(2 * guard + 1) else {
+            return;
         };
-        let (mut sum, mut count) = (0.0f32, 0u32);
-        for (l, &p) in power.iter().enumerate() {
-            if background(l) {
-                sum += p;
-                // (at most one per cell of the bin: never saturates)
-                count = count.saturating_add(1);
-            }
-        }
+        let start = (peak_at % n.max(1) + guard + 1) % n.max(1);
+        let first_len = len.min(n - start);
+        let (first, second) = (
+            power.get(start..start + first_len).unwrap_or(&[]),
+            power.get(..len - first_len).unwrap_or(&[]),
+        );
+        let cells = || first.iter().chain(second.iter());
+        let sum: f32 = first.iter().sum::<f32>() + second.iter().sum::<f32>();
+        // (at most n ≤ 8192 cells)
+        let count = len as u32;
         // (a statistics count over bins: saturates rather than wraps)
         if count == 0 || !(sum > 0.0) {
             self.count = self.count.saturating_add(u64::from(count));
             return;
         }
         let scale = count as f32 / sum;
-        let mut sum_sq = 0.0f32;
-        for (l, &p) in power.iter().enumerate() {
-            if background(l) {
-                let x = p * scale;
-                sum_sq += x * x;
-            }
-        }
+        let sum_sq: f32 = cells().map(|&p| (p * scale) * (p * scale)).sum();
         let unscale = f64::from(sum) / f64::from(count);
         self.sum += f64::from(sum);
         self.sum_sq += f64::from(sum_sq) * unscale * unscale;
@@ -249,16 +246,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             };
             self.accumulate_chunk(i, q, grid, offset, chunk.bins(), config, dc);
             for (lane, &(b, _, _)) in self.lanes.iter().zip(chunk.bins()) {
-                let (mut local, mut local_at) = (0.0f32, 0usize);
-                let (mut top, mut top_at) = (0.0f32, None);
-                for (l, &p) in lane.iter().enumerate() {
-                    if p > local {
-                        (local, local_at) = (p, l);
-                    }
-                    if p > top && window.is_none_or(|w| w.contains(l, N)) {
-                        (top, top_at) = (p, Some(l));
-                    }
-                }
+                let (local, local_at, top, top_at) = strongest(lane, window);
                 if let Some(slot) = self.peaks.get_mut(b) {
                     *slot = (local, local_at as u32);
                 }
@@ -515,6 +503,23 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             let (carrier, code) = c.at(start);
             *r = (carrier, code, c.phasor(m, i, q, config, dc));
         }
+        if tones.is_empty() && cancelled.is_empty() {
+            // (the common case: nothing to cancel, one tight pass)
+            let range = start..end.max(start);
+            let xs = i.get(range.clone()).unwrap_or(&[]).iter();
+            let nco = MixNco {
+                phase: 0,
+                step,
+                bin_acc,
+                bin_step,
+                dc: [dc[0], dq],
+            };
+            match q.map(|q| q.get(range).unwrap_or(&[])) {
+                Some(ys) => nco.mix(&mut self.data, xs.zip(ys.iter())),
+                None => nco.mix(&mut self.data, xs.zip(core::iter::repeat(&0i8))),
+            }
+            return;
+        }
         for k in start..end {
             let mut x = f32::from(i.get(k).copied().unwrap_or(0)) - dc[0];
             let mut y = q.and_then(|q| q.get(k)).map_or(0.0, |v| f32::from(*v) - dq);
@@ -618,7 +623,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let (peak, floor) = self.scan(i, q, &grid, Some(CodeWindow { centre, half }), config, dc);
         let k = floor.effective_ms(config.noncoherent_ms).min(effective_ms);
         let cells = (DWELL_BINS * (2 * half + 1)) as f64;
-        let threshold = detection_threshold(k, cells, VERIFICATION_FALSE_ALARM);
+        let threshold = self.threshold(k, cells, VERIFICATION_FALSE_ALARM);
         let mean = floor.mean();
         let metric = if mean > 0.0 { peak.power / mean } else { 0.0 };
         Dwell {
@@ -633,17 +638,74 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     }
 }
 
+/// The strongest cell of a bin (power, lag) and the strongest within `window` (the same
+/// without a window; `None` when no cell of the window is above 0).
+fn strongest<const N: usize>(
+    power: &[f32; N],
+    window: Option<CodeWindow>,
+) -> (f32, usize, f32, Option<usize>) {
+    let (mut local, mut local_at) = (0.0f32, 0usize);
+    for (l, &p) in power.iter().enumerate() {
+        if p > local {
+            (local, local_at) = (p, l);
+        }
+    }
+    let Some(w) = window else {
+        return (local, local_at, local, (local > 0.0).then_some(local_at));
+    };
+    let (mut top, mut top_at) = (0.0f32, None);
+    for (l, &p) in power.iter().enumerate() {
+        if p > top && w.contains(l, N) {
+            (top, top_at) = (p, Some(l));
+        }
+    }
+    (local, local_at, top, top_at)
+}
+
+/// The carrier and bin counters of one millisecond's mix (see [`Acquisition::decimate`]).
+struct MixNco {
+    phase: u32,
+    step: u32,
+    bin_acc: u64,
+    bin_step: u64,
+    dc: [f32; 2],
+}
+
+impl MixNco {
+    /// Mixes the `(I, Q)` samples with the carrier and integrates them into the bins.
+    fn mix<'a, const N: usize>(
+        mut self,
+        data: &mut [Complex; N],
+        samples: impl Iterator<Item = (&'a i8, &'a i8)>,
+    ) {
+        for (&xi, &yi) in samples {
+            let (x, y) = (f32::from(xi) - self.dc[0], f32::from(yi) - self.dc[1]);
+            let idx = carrier_index(self.phase);
+            let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
+            // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
+            let bin = ((self.bin_acc >> 32) as usize) & (N - 1);
+            if let Some(d) = data.get_mut(bin) {
+                d[0] += x * c + y * s;
+                d[1] += y * c - x * s;
+            }
+            self.phase = self.phase.wrapping_add(self.step);
+            self.bin_acc = self.bin_acc.wrapping_add(self.bin_step);
+        }
+    }
+}
+
 /// The FFT's line spacing for one millisecond of `N` bins, Hz.
 const LINE_HZ: f32 = 1000.0;
 
 /// Two Dopplers closer than this share a sub-bin offset, Hz.
 const OFFSET_TOLERANCE_HZ: f32 = 0.01;
 
-/// A Doppler `f` (Hz) as a sub-bin offset (Hz, in `[−500, 500]`) and whole FFT lines:
-/// `f = offset + lines · 1 kHz`.
+/// A Doppler `f` (Hz) as a sub-bin offset (Hz, in `[−500, 500)`) and whole FFT lines:
+/// `f = offset + lines · 1 kHz` (half-kHz Dopplers all get offset −500 Hz, so that they
+/// share one spectrum).
 pub(super) fn split_doppler(f: f32) -> (f32, i32) {
     // (|f| ≤ the validated span: far inside i32; the cast saturates anyway)
-    let lines = libm::roundf(f / LINE_HZ) as i32;
+    let lines = libm::floorf(f / LINE_HZ + 0.5) as i32;
     (f - lines as f32 * LINE_HZ, lines)
 }
 
@@ -704,10 +766,15 @@ fn correlate_shifted<const N: usize>(
 ) {
     // (N ≤ 8192: the modulo is exact in i64)
     let s = i64::from(lines).rem_euclid(N as i64) as usize;
-    let (head, tail) = x.split_at(s.min(N));
-    let shifted = tail.iter().chain(head.iter());
-    for ((o, d), c) in out.iter_mut().zip(shifted).zip(c.iter()) {
-        *o = [d[0] * c[0] + d[1] * c[1], d[0] * c[1] - d[1] * c[0]];
+    let s = s.min(N);
+    // out[..N − s] from x[s..], out[N − s..] from x[..s]: two straight runs
+    let (x_head, x_tail) = x.split_at(s);
+    let (out_a, out_b) = out.split_at_mut(N - s);
+    let (c_a, c_b) = c.split_at(N - s);
+    for (runs_out, runs_x, runs_c) in [(out_a, x_tail, c_a), (out_b, x_head, c_b)] {
+        for ((o, d), c) in runs_out.iter_mut().zip(runs_x).zip(runs_c) {
+            *o = [d[0] * c[0] + d[1] * c[1], d[0] * c[1] - d[1] * c[0]];
+        }
     }
 }
 
