@@ -90,8 +90,8 @@ impl<const N: usize> Fft<N> {
         // (at most log₄ N stages: len grows fourfold up to N)
         while len < N {
             let quarter = len;
-            len *= 4;
-            self.radix4_stage(x, quarter, N / len);
+            len = len.saturating_mul(4);
+            self.radix4_stage(x, quarter, N / len.max(1));
         }
     }
 
@@ -100,13 +100,14 @@ impl<const N: usize> Fft<N> {
     /// combined with the twiddles `w^r`, `w = e^{−j2πk/(4·quarter)}` = table entry
     /// `k · stride`.
     fn radix4_stage(&self, x: &mut [Complex; N], quarter: usize, stride: usize) {
-        for block in x.chunks_exact_mut(4 * quarter) {
-            let (ab, cd) = block.split_at_mut(2 * quarter);
+        // (quarter ≤ N/4 and stride ≤ N/4: the products stay below N)
+        for block in x.chunks_exact_mut(quarter.saturating_mul(4)) {
+            let (ab, cd) = block.split_at_mut(quarter.saturating_mul(2));
             let (a, b) = ab.split_at_mut(quarter);
             let (c, d) = cd.split_at_mut(quarter);
             let w1 = self.twiddles.iter().step_by(stride);
-            let w2 = self.twiddles.iter().step_by(2 * stride);
-            let w3 = self.twiddles.iter().step_by(3 * stride);
+            let w2 = self.twiddles.iter().step_by(stride.saturating_mul(2));
+            let w3 = self.twiddles.iter().step_by(stride.saturating_mul(3));
             let points = a
                 .iter_mut()
                 .zip(b.iter_mut())

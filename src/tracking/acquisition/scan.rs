@@ -103,14 +103,16 @@ impl Floor {
     /// no test per cell.
     fn add_bin(&mut self, power: &[f32], peak_at: usize, guard: usize) {
         let n = power.len();
-        let Some(len) = n.checked_sub(2 * guard + 1) else {
+        let Some(len) = n.checked_sub(guard.saturating_mul(2).saturating_add(1)) else {
             return;
         };
-        let start = (peak_at % n.max(1) + guard + 1) % n.max(1);
+        let start = (peak_at % n.max(1)).saturating_add(guard).saturating_add(1) % n.max(1);
         let first_len = len.min(n - start);
         let (first, second) = (
-            power.get(start..start + first_len).unwrap_or(&[]),
-            power.get(..len - first_len).unwrap_or(&[]),
+            power
+                .get(start..start.saturating_add(first_len))
+                .unwrap_or(&[]),
+            power.get(..len.saturating_sub(first_len)).unwrap_or(&[]),
         );
         let cells = || first.iter().chain(second.iter());
         let sum: f32 = first.iter().sum::<f32>() + second.iter().sum::<f32>();
@@ -737,15 +739,18 @@ fn take_chunk<const L: usize>(
         return chunk;
     }
     let (offset, _) = split_doppler(grid.doppler(first));
-    for (b, d) in done.iter_mut().enumerate().take(bins).skip(first) {
+    let rest = done.get_mut(first..bins.max(first)).unwrap_or(&mut []);
+    for (j, d) in rest.iter_mut().enumerate() {
         if chunk.count >= L {
             break;
         }
+        // (first + j < bins ≤ MAX_DOPPLER_BINS: no wrap)
+        let b = first.wrapping_add(j);
         let (o, lines) = split_doppler(grid.doppler(b));
         if !*d && (o - offset).abs() <= OFFSET_TOLERANCE_HZ {
             if let Some(slot) = chunk.bins.get_mut(chunk.count) {
                 *slot = (b, offset, lines);
-                chunk.count += 1;
+                chunk.count = chunk.count.saturating_add(1);
                 *d = true;
             }
         }
