@@ -47,7 +47,7 @@
 #define GA_SAMPLE_FFT 2048
 
 // 64-bit words of a [`GaSampleReceiver`]'s storage.
-#define GA_SAMPLE_RECEIVER_WORDS 10752
+#define GA_SAMPLE_RECEIVER_WORDS 12800
 
 // Bytes of a [`GaSampleReceiver`] (`GA_SAMPLE_RECEIVER_WORDS × 8`).
 #define GA_SAMPLE_RECEIVER_SIZE (GA_SAMPLE_RECEIVER_WORDS * 8)

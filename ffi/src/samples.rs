@@ -28,7 +28,7 @@ pub const GA_SAMPLE_FFT: usize = 2048;
 pub type FfiSampleReceiver = SampleReceiver<GA_SAMPLE_CHANNELS, GA_SAMPLE_FFT>;
 
 /// 64-bit words of a [`GaSampleReceiver`]'s storage.
-pub const GA_SAMPLE_RECEIVER_WORDS: usize = 10752;
+pub const GA_SAMPLE_RECEIVER_WORDS: usize = 12800;
 /// Bytes of a [`GaSampleReceiver`] (`GA_SAMPLE_RECEIVER_WORDS × 8`).
 pub const GA_SAMPLE_RECEIVER_SIZE: usize = GA_SAMPLE_RECEIVER_WORDS * 8;
 

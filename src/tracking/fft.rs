@@ -1,7 +1,12 @@
-//! A fixed-size in-place radix-2 complex FFT in f32 (for acquisition), no allocation.
+//! A fixed-size in-place complex FFT in f32 (for acquisition), no allocation.
 //!
 //! `N` is a power of two (checked by [`Fft::new`]); the twiddle table `e^{−j2πk/N}` is built
-//! once with libm. Bounded: `log₂ N` stages of `N/2` butterflies.
+//! once with libm, and no butterfly computes a trigonometric function. The transform is a
+//! decimation-in-time radix-4 FFT on the bit-reversed input (one radix-2 stage first when
+//! `log₂ N` is odd): `⌈log₂ N / 2⌉` stages of `N/4` butterflies of three complex
+//! multiplications, against `log₂ N` stages of `N/2` multiplications for radix 2 (on the
+//! Cortex-M4F a 1024-point transform costs about half the instructions of the radix-2 one it
+//! replaced). Bounded: every loop runs over fixed slices.
 
 /// A complex number as `[re, im]`.
 pub type Complex = [f32; 2];
@@ -11,6 +16,12 @@ pub type Complex = [f32; 2];
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Fft<const N: usize> {
     twiddles: [Complex; N],
+}
+
+/// `a · b`.
+#[inline(always)]
+fn mul(a: Complex, b: Complex) -> Complex {
+    [a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]]
 }
 
 impl<const N: usize> Fft<N> {
@@ -35,37 +46,165 @@ impl<const N: usize> Fft<N> {
                 v[1] = -v[1];
             }
         }
-        // Bit-reversal permutation.
-        let bits = N.trailing_zeros();
-        for i in 0..N {
-            let j = i.reverse_bits() >> (usize::BITS - bits);
-            if j > i && j < N {
-                x.swap(i, j);
-            }
-        }
-        let mut len = 2;
-        while len <= N {
-            let half = len / 2;
-            let stride = N / len;
-            for block in x.chunks_exact_mut(len) {
-                let (lo, hi) = block.split_at_mut(half);
-                for ((u, v), w) in lo
-                    .iter_mut()
-                    .zip(hi.iter_mut())
-                    .zip(self.twiddles.iter().step_by(stride))
-                {
-                    let t = [v[0] * w[0] - v[1] * w[1], v[0] * w[1] + v[1] * w[0]];
-                    let a = *u;
-                    *u = [a[0] + t[0], a[1] + t[1]];
-                    *v = [a[0] - t[0], a[1] - t[1]];
-                }
-            }
-            len *= 2;
-        }
+        self.forward(x);
         if inverse {
             for v in x.iter_mut() {
                 v[1] = -v[1];
             }
         }
+    }
+
+    /// In-place forward transform `X[k] = Σ x[n] e^{−j2πkn/N}` (radix 4, see the module
+    /// documentation).
+    pub fn forward(&self, x: &mut [Complex; N]) {
+        bit_reverse(x);
+        let mut len = 1;
+        if N.trailing_zeros() % 2 == 1 {
+            // One radix-2 stage (twiddle 1) to leave an even number of bits.
+            for pair in x.chunks_exact_mut(2) {
+                if let [a, b] = pair {
+                    let (u, v) = (*a, *b);
+                    *a = [u[0] + v[0], u[1] + v[1]];
+                    *b = [u[0] - v[0], u[1] - v[1]];
+                }
+            }
+            len = 2;
+        }
+        if len == 1 {
+            // The first radix-4 stage: twiddles all 1.
+            for quad in x.chunks_exact_mut(4) {
+                if let [a, b, c, d] = quad {
+                    let (t0, t2, t1, t3) = (*a, *b, *c, *d);
+                    let s02 = [t0[0] + t2[0], t0[1] + t2[1]];
+                    let d02 = [t0[0] - t2[0], t0[1] - t2[1]];
+                    let s13 = [t1[0] + t3[0], t1[1] + t3[1]];
+                    let r13 = [t1[1] - t3[1], t3[0] - t1[0]];
+                    *a = [s02[0] + s13[0], s02[1] + s13[1]];
+                    *b = [d02[0] + r13[0], d02[1] + r13[1]];
+                    *c = [s02[0] - s13[0], s02[1] - s13[1]];
+                    *d = [d02[0] - r13[0], d02[1] - r13[1]];
+                }
+            }
+            len = 4;
+        }
+        // (at most log₄ N stages: len grows fourfold up to N)
+        while len < N {
+            let quarter = len;
+            len = len.saturating_mul(4);
+            self.radix4_stage(x, quarter, N / len.max(1));
+        }
+    }
+
+    /// One radix-4 stage: every block of `4 · quarter` points holds (bit-reversed) the
+    /// transforms of its samples `≡ 0, 2, 1, 3 (mod 4)`, `quarter` points each; they are
+    /// combined with the twiddles `w^r`, `w = e^{−j2πk/(4·quarter)}` = table entry
+    /// `k · stride`.
+    fn radix4_stage(&self, x: &mut [Complex; N], quarter: usize, stride: usize) {
+        // (quarter ≤ N/4 and stride ≤ N/4: the products stay below N)
+        for block in x.chunks_exact_mut(quarter.saturating_mul(4)) {
+            let (ab, cd) = block.split_at_mut(quarter.saturating_mul(2));
+            let (a, b) = ab.split_at_mut(quarter);
+            let (c, d) = cd.split_at_mut(quarter);
+            let w1 = self.twiddles.iter().step_by(stride);
+            let w2 = self.twiddles.iter().step_by(stride.saturating_mul(2));
+            let w3 = self.twiddles.iter().step_by(stride.saturating_mul(3));
+            let points = a
+                .iter_mut()
+                .zip(b.iter_mut())
+                .zip(c.iter_mut().zip(d.iter_mut()));
+            for (((a, b), (c, d)), ((w1, w2), w3)) in points.zip(w1.zip(w2).zip(w3)) {
+                // residues 0, 2, 1, 3 live in a, b, c, d
+                let t0 = *a;
+                let t2 = mul(*b, *w2);
+                let t1 = mul(*c, *w1);
+                let t3 = mul(*d, *w3);
+                let s02 = [t0[0] + t2[0], t0[1] + t2[1]];
+                let d02 = [t0[0] - t2[0], t0[1] - t2[1]];
+                let s13 = [t1[0] + t3[0], t1[1] + t3[1]];
+                // −j · (t1 − t3)
+                let r13 = [t1[1] - t3[1], t3[0] - t1[0]];
+                *a = [s02[0] + s13[0], s02[1] + s13[1]];
+                *b = [d02[0] + r13[0], d02[1] + r13[1]];
+                *c = [s02[0] - s13[0], s02[1] - s13[1]];
+                *d = [d02[0] - r13[0], d02[1] - r13[1]];
+            }
+        }
+    }
+}
+
+/// The bit-reversal permutation of `x` (`N` a power of two).
+fn bit_reverse<const N: usize>(x: &mut [Complex; N]) {
+    let bits = N.trailing_zeros();
+    if bits == 0 {
+        return;
+    }
+    for i in 0..N {
+        let j = i.reverse_bits() >> (usize::BITS - bits);
+        if j > i && j < N {
+            x.swap(i, j);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::noise::{SplitMix64, StandardNormal};
+
+    /// The f64 DFT of `x`, directly from its definition.
+    fn dft<const N: usize>(x: &[Complex; N], sign: f64) -> [[f64; 2]; N] {
+        let mut out = [[0.0f64; 2]; N];
+        for (k, o) in out.iter_mut().enumerate() {
+            for (n, v) in x.iter().enumerate() {
+                let a = sign * 2.0 * core::f64::consts::PI * ((k * n) % N) as f64 / N as f64;
+                let (c, s) = (libm::cos(a), libm::sin(a));
+                let (re, im) = (f64::from(v[0]), f64::from(v[1]));
+                o[0] += re * c - im * s;
+                o[1] += re * s + im * c;
+            }
+        }
+        out
+    }
+
+    /// Largest error of the f32 transform over the largest f64 DFT line.
+    fn relative_error<const N: usize>(inverse: bool, seed: u64) -> f64 {
+        let mut rng = SplitMix64::new(seed);
+        let mut normal = StandardNormal::new();
+        let mut x = [[0.0f32; 2]; N];
+        for v in x.iter_mut() {
+            *v = [normal.sample(&mut rng), normal.sample(&mut rng)];
+        }
+        let reference = dft(&x, if inverse { 1.0 } else { -1.0 });
+        let fft = Fft::<N>::new().unwrap();
+        fft.transform(&mut x, inverse);
+        let (mut err, mut top) = (0.0f64, 0.0f64);
+        for (a, r) in x.iter().zip(reference.iter()) {
+            let e = libm::hypot(f64::from(a[0]) - r[0], f64::from(a[1]) - r[1]);
+            err = err.max(e);
+            top = top.max(libm::hypot(r[0], r[1]));
+        }
+        err / top
+    }
+
+    /// The radix-4 transform (even and odd `log₂ N`, forward and inverse) equals the f64 DFT
+    /// to within f32 rounding (a few 10⁻⁷ of the largest line, growing like `log N`).
+    #[test]
+    fn the_fft_equals_the_f64_dft() {
+        for inverse in [false, true] {
+            assert!(relative_error::<4>(inverse, 1) < 1e-6);
+            assert!(relative_error::<8>(inverse, 2) < 1e-6);
+            assert!(relative_error::<64>(inverse, 3) < 2e-6);
+            assert!(relative_error::<512>(inverse, 4) < 3e-6);
+            assert!(relative_error::<1024>(inverse, 5) < 3e-6);
+            assert!(relative_error::<2048>(inverse, 6) < 3e-6);
+        }
+    }
+
+    /// Sizes that are not powers of two ≥ 4 are refused.
+    #[test]
+    fn bad_sizes_are_refused() {
+        assert!(Fft::<2>::new().is_none());
+        assert!(Fft::<12>::new().is_none());
+        assert!(Fft::<16>::new().is_some());
     }
 }

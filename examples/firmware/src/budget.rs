@@ -112,6 +112,22 @@ pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
     out
 }
 
+/// [`measure`] with a formatted name.
+#[inline(never)]
+pub fn measure_named<R>(name: core::fmt::Arguments<'_>, f: impl FnOnce() -> R) -> R {
+    let n = REGION.fetch_add(1, Ordering::Relaxed);
+    paint_free_stack();
+    let sp = cortex_m::register::msp::read() as usize;
+    // SAFETY: the markers are register-to-self moves with no effect on program state.
+    unsafe { core::arch::asm!("mov r8, r8") };
+    let out = call(f);
+    unsafe { core::arch::asm!("mov r9, r9") };
+    let out = black_box(out);
+    let used = stack_used_below(sp);
+    hprintln!("budget region {}: {}, stack {} B", n, name, used);
+    out
+}
+
 /// Every budget of the firmware, in region order.
 pub fn run_all() -> Option<ReceiverOutcome> {
     ekf_budgets();
@@ -120,6 +136,8 @@ pub fn run_all() -> Option<ReceiverOutcome> {
     packing_budgets();
     tracking_budgets();
     acquisition_budget();
+    shared_acquisition_budget();
+    fft_budget();
     snapshot_budgets();
     dcm_budgets();
     gyro_budgets();
@@ -583,7 +601,8 @@ fn tracking_budgets() {
 fn acquisition_budget() {
     let s = &SIGNAL_SAMPLES;
     // (the engine bound directly, not through a tuple: one copy of it on the stack, not two)
-    let Ok(mut acq) = Acquisition::<1024>::new() else {
+    let mut engine = Acquisition::<1024>::new();
+    let Ok(acq) = engine.as_mut() else {
         hprintln!("budget acquisition: engine refused");
         return;
     };
@@ -597,8 +616,69 @@ fn acquisition_budget() {
         false_alarm_probability: 1e-3,
     };
     let _ = measure("acquisition N=1024: 1 PRN x 1 Doppler bin x 1 ms (mix, 2 FFTs, threshold)", || {
-        black_box(&mut acq).search(prn, black_box(&s[0][..]), Some(black_box(&s[3][..])), 0, &cfg).is_ok()
+        black_box(&mut *acq).search(prn, black_box(&s[0][..]), Some(black_box(&s[3][..])), 0, &cfg).is_ok()
     });
+}
+
+/// Lanes of the shared-FFT acquisition measured below (Doppler bins of one sub-bin offset
+/// searched from one mix + FFT per millisecond): `.ci/run` derives the warm and cold starts
+/// with the same number.
+pub const SHARED_LANES: usize = 4;
+
+/// The shared-FFT search (radix-4 FFT, whole-kHz Doppler steps as spectrum shifts,
+/// `SHARED_LANES` bins per mix + FFT of the data) on noise, N = 1024, one PRN: 1 bin
+/// (1 chunk), ±1 kHz (5 bins, 2 chunks), ±1.5 kHz (7 bins, 2 chunks) over 1 ms, ±1.5 kHz
+/// over 2 ms, and the threshold for K = 1, 2, 6 and 8 over a cold grid's cells. `.ci/run`
+/// solves these for the per-search, per-chunk·ms, per-bin·ms and per-bin costs. Its own
+/// frame: the engine (54 KiB with 4 lanes; `new` leaves two copies of it in this frame) is the
+/// largest object of the self-check.
+#[inline(never)]
+fn shared_acquisition_budget() {
+    let s = &SIGNAL_SAMPLES;
+    // (bound by reference into the Result: one copy of the engine on the stack, not two)
+    let mut engine = Acquisition::<1024, SHARED_LANES>::new();
+    let Ok(acq) = engine.as_mut() else {
+        hprintln!("budget shared acquisition: engine refused");
+        return;
+    };
+    let Some(prn) = Prn::new(5) else { return };
+    // 2 ms of noise: the flash's millisecond twice over.
+    let (mut i, mut q) = ([0i8; 2 * SIGNAL_SELF_TEST_LEN], [0i8; 2 * SIGNAL_SELF_TEST_LEN]);
+    for (k, (a, b)) in i.iter_mut().zip(q.iter_mut()).enumerate() {
+        *a = s[0][k % SIGNAL_SELF_TEST_LEN];
+        *b = s[3][(k * 7) % SIGNAL_SELF_TEST_LEN];
+    }
+    for (max, bins, ms) in [(0.0f32, 1, 1u16), (1000.0, 5, 1), (1500.0, 7, 1), (1500.0, 7, 2)] {
+        let cfg = AcquisitionConfig {
+            sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
+            intermediate_frequency_hz: 0.0,
+            doppler_max_hz: max,
+            doppler_step_hz: 500.0,
+            noncoherent_ms: ms,
+            false_alarm_probability: 1e-3,
+        };
+        let _ = measure_named(format_args!("shared acquisition N=1024 L={}: 1 PRN x {} bins x {} ms", SHARED_LANES, bins, ms), || {
+            black_box(&mut *acq).search(prn, black_box(&i[..]), Some(black_box(&q[..])), 0, &cfg).is_ok()
+        });
+    }
+    for k in [1u16, 2, 6, 8] {
+        let _ = measure_named(format_args!("acquisition threshold K={}: 201 x 1024 cells", k), || {
+            gnss_attitude::tracking::acquisition::detection_threshold(black_box(k), black_box(201.0 * 1024.0), black_box(1e-3))
+        });
+    }
+}
+
+/// One 1024-point forward FFT (the acquisition's), in a frame of its own.
+#[inline(never)]
+fn fft_budget() {
+    let s = &SIGNAL_SAMPLES;
+    if let Some(fft) = gnss_attitude::tracking::fft::Fft::<1024>::new() {
+        let mut x = [[0.0f32; 2]; 1024];
+        for (k, v) in x.iter_mut().enumerate() {
+            *v = [f32::from(s[0][k]), f32::from(s[3][k])];
+        }
+        measure("fft N=1024 forward (radix 4)", || fft.forward(black_box(&mut x)));
+    }
 }
 
 /// Epochs of the receiver's example flight on the target (3 s: the cold start, the fine

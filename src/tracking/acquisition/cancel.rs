@@ -208,7 +208,7 @@ fn refined(
     Cancelled::new(s.prn, chips, doppler + df, config)
 }
 
-impl<const N: usize> Acquisition<N> {
+impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// Sets the signals cancelled from the samples in the scans that follow (until the next
     /// [`Acquisition::prepare_interference`]): `signals` except those of `prn`, at most
     /// [`MAX_CANCELLED`], each refined on the samples. Returns how many.

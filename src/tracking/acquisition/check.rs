@@ -70,7 +70,7 @@ pub struct CancellationCheck {
 /// satellite's cross-correlation keeps what the cancellation leaves of that satellite).
 pub const CANCELLATION_KEEP_FRACTION: f32 = 0.5;
 
-impl<const N: usize> Acquisition<N> {
+impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// Tests `candidate` (a result of a search on `i`, `q`) by cancelling the `known`
     /// signals from the samples ([`Acquisition::search_report_cancelling`]'s cancellation):
     /// its power at its Doppler and code phase over the search's `K` ms, background removed,

@@ -247,14 +247,28 @@ pub struct SearchReport {
     pub interference: bool,
 }
 
-/// The acquisition engine with its fixed workspace (`N` bins per millisecond).
+/// Doppler bins that share one mix and forward FFT of each millisecond by default (the lanes
+/// of [`Acquisition`]): 1 keeps the engine's memory at `34·N` bytes plus the peaks (38 KiB
+/// for `N = 1024`); each further lane adds `4·N` bytes and saves most of a mix and an FFT
+/// per bin and millisecond (the flight computer's budget uses 4, the host 8).
+pub const DEFAULT_LANES: usize = 1;
+
+/// The acquisition engine with its fixed workspace (`N` bins per millisecond; `L` lanes:
+/// Doppler bins of one sub-bin offset searched together from one FFT of each millisecond,
+/// `4·N` bytes each).
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Acquisition<const N: usize> {
+pub struct Acquisition<const N: usize, const L: usize = DEFAULT_LANES> {
     fft: Fft<N>,
     code: [Complex; N],
     data: [Complex; N],
-    power: [f32; N],
+    /// The spectrum product of one bin, then its correlation.
+    work: [Complex; N],
+    /// The non-coherent sums of the chunk's bins.
+    lanes: [[f32; N]; L],
+    /// The last two thresholds computed, `(k, cells, p_fa, threshold)` (`k` 0: empty): the
+    /// searches of a start share them (f64 is software on the target).
+    thresholds: [(u16, f64, f64, f32); 2],
     peaks: [(f32, u32); MAX_DOPPLER_BINS],
     /// Background line power of the samples' spectrum (interference excision; 0: none).
     level: f32,
@@ -266,13 +280,14 @@ pub struct Acquisition<const N: usize> {
     cancelled_count: usize,
 }
 
-impl<const N: usize> Acquisition<N> {
+impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// A new engine.
     ///
     /// # Errors
-    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192.
+    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192 and `L`
+    /// in 1–64.
     pub fn new() -> Result<Self, AcquisitionError> {
-        if !(1024..=8192).contains(&N) {
+        if !(1024..=8192).contains(&N) || !(1..=64).contains(&L) {
             return Err(AcquisitionError::InvalidConfig);
         }
         let fft = Fft::new().ok_or(AcquisitionError::InvalidConfig)?;
@@ -280,7 +295,9 @@ impl<const N: usize> Acquisition<N> {
             fft,
             code: [[0.0; 2]; N],
             data: [[0.0; 2]; N],
-            power: [0.0; N],
+            work: [[0.0; 2]; N],
+            lanes: [[0.0; N]; L],
+            thresholds: [(0, 0.0, 0.0, 0.0); 2],
             peaks: [(0.0, 0); MAX_DOPPLER_BINS],
             level: 0.0,
             tones: [tone::Tone::default(); tone::MAX_TONES],
@@ -313,6 +330,17 @@ impl<const N: usize> Acquisition<N> {
     ) -> Result<SearchResult, AcquisitionError> {
         self.search_report(prn, i, q, first_sample, config)
             .map(|r| r.result)
+    }
+
+    /// [`detection_threshold`], remembered for the last two arguments.
+    fn threshold(&mut self, k: u16, cells: f64, p_fa: f64) -> f32 {
+        let key = |e: &(u16, f64, f64, f32)| e.0 == k && e.1 == cells && e.2 == p_fa;
+        if let Some(e) = self.thresholds.iter().find(|e| key(e)) {
+            return e.3;
+        }
+        let t = detection_threshold(k, cells, p_fa);
+        self.thresholds = [(k, cells, p_fa, t), self.thresholds[0]];
+        t
     }
 
     /// [`Acquisition::search`] with the background's figures and the verification's outcome.
@@ -364,7 +392,7 @@ impl<const N: usize> Acquisition<N> {
         let effective_ms = floor.effective_ms(k);
         let noise_floor = floor.mean();
         let cells = N as f64 * config.doppler_bins() as f64; // (exact below 2⁵³)
-        let threshold = detection_threshold(
+        let threshold = self.threshold(
             effective_ms,
             cells,
             f64::from(config.false_alarm_probability),
@@ -457,9 +485,11 @@ pub fn detection_threshold(k: u16, cells: f64, p_fa: f64) -> f32 {
     // Per-cell probability, in logs for accuracy: ln p = ln(−expm1(ln(1−P)/M)).
     let ln_p_cell = libm::log(-libm::expm1(libm::log1p(-p_fa) / cells.max(1.0)));
     let (mut lo, mut hi) = (1.0f64, 200.0f64);
+    let n = k as usize;
+    let ln_gamma_k = ln_factorial_below(n);
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
-        if ln_gamma_survival(k, k * mid) > ln_p_cell {
+        if ln_gamma_survival(n, k * mid, ln_gamma_k) > ln_p_cell {
             lo = mid;
         } else {
             hi = mid;
@@ -468,24 +498,26 @@ pub fn detection_threshold(k: u16, cells: f64, p_fa: f64) -> f32 {
     (0.5 * (lo + hi)) as f32
 }
 
-/// `ln Q(k, x) = ln(e^{−x} Σ_{i<k} xⁱ/i!)` for integer `k` (log-sum-exp, `k` ≤ 200 terms).
-fn ln_gamma_survival(k: f64, x: f64) -> f64 {
-    let n = k as usize;
-    let mut max_term = f64::NEG_INFINITY;
-    let mut ln_term = 0.0f64; // ln(x^0/0!)
-    let mut terms = [0.0f64; MAX_NONCOHERENT_MS as usize];
-    for (i, t) in terms.iter_mut().enumerate().take(n) {
-        if i > 0 {
-            ln_term += libm::log(x) - libm::log(i as f64);
-        }
-        *t = ln_term;
-        max_term = max_term.max(ln_term);
+/// `ln Q(k, x) = ln(e^{−x} Σ_{i<k} xⁱ/i!)` for integer `k` ≥ 1 and `x` > 0, with
+/// `ln_gamma_k = ln (k − 1)!`: the sum factored by its last term, `x^{k−1}/(k−1)!`, and
+/// summed backwards (`1 + (k−1)/x + (k−1)(k−2)/x² + …`; every ratio ≤ 1 for `x ≥ k − 1`,
+/// where the threshold's bisection works): one logarithm of `x` and one of the sum per
+/// evaluation (the target has no double-precision unit: every f64 operation is software).
+fn ln_gamma_survival(k: usize, x: f64, ln_gamma_k: f64) -> f64 {
+    let (mut ratio, mut sum) = (1.0f64, 1.0f64);
+    for i in (1..k).rev() {
+        ratio *= i as f64 / x;
+        sum += ratio;
     }
-    let mut sum = 0.0;
-    for t in terms.iter().take(n) {
-        sum += libm::exp(t - max_term);
+    if k <= 1 {
+        return -x;
     }
-    -x + max_term + libm::log(sum)
+    -x + (k - 1) as f64 * libm::log(x) - ln_gamma_k + libm::log(sum)
+}
+
+/// `ln (k − 1)!`.
+fn ln_factorial_below(k: usize) -> f64 {
+    (2..k).map(|i| libm::log(i as f64)).sum()
 }
 
 /// Errors of acquisition ([`crate::tracking::acquisition`]).
@@ -580,6 +612,42 @@ mod tests {
                 .expect("room for a search");
         }
         (i, q)
+    }
+
+    /// The previous evaluation of `ln Q(k, x)` (log-sum-exp over the terms), f64.
+    fn ln_gamma_survival_reference(k: usize, x: f64) -> f64 {
+        let mut terms = [0.0f64; MAX_NONCOHERENT_MS as usize];
+        let (mut max_term, mut ln_term) = (f64::NEG_INFINITY, 0.0f64);
+        for (i, t) in terms.iter_mut().enumerate().take(k) {
+            if i > 0 {
+                ln_term += libm::log(x) - libm::log(i as f64);
+            }
+            *t = ln_term;
+            max_term = max_term.max(ln_term);
+        }
+        let sum: f64 = terms.iter().take(k).map(|t| libm::exp(t - max_term)).sum();
+        -x + max_term + libm::log(sum)
+    }
+
+    /// The backward-summed survival function equals the log-sum-exp one to 1e-12 relative
+    /// over the thresholds' range (`k` 1–200, `x` from `k` to `200 k`), so the thresholds
+    /// (and the false-alarm rate) are the ones they were.
+    #[test]
+    fn the_fast_survival_function_equals_the_reference() {
+        for k in [1usize, 2, 3, 4, 8, 10, 20, 57, 200] {
+            let lg = ln_factorial_below(k);
+            for t in [1.0f64, 1.3, 2.0, 3.97, 7.5, 30.0, 199.0] {
+                let x = k as f64 * t;
+                let (a, b) = (
+                    ln_gamma_survival(k, x, lg),
+                    ln_gamma_survival_reference(k, x),
+                );
+                assert!(
+                    (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+                    "k {k} x {x}: {a} {b}"
+                );
+            }
+        }
     }
 
     fn engine() -> Acquisition<1024> {

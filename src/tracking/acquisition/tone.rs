@@ -87,7 +87,7 @@ pub(super) fn rotate(a: Complex, phase: u32) -> Complex {
     [a[0] * c - a[1] * s, a[0] * s + a[1] * c]
 }
 
-impl<const N: usize> Acquisition<N> {
+impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// Finds up to [`MAX_TONES`] tones in `self.data` (the IF-mixed spectrum of millisecond
     /// 0, background line power `level`) and refines their frequencies. Returns how many.
     pub(super) fn find_tones(
