@@ -1,0 +1,116 @@
+//! The whole receiver in real time? `SampleReceiver` (acquisition, 8 tracking channels over
+//! 3 antennas, adapter, `AttitudeReceiver` with a gyro) on samples synthesized on the target,
+//! for a 1-bit and a 2-bit front end, counted by QEMU's `insnmark` plugin (issue 18, item 4).
+//!
+//! Per front end ([`frontend::FrontEnd`]):
+//!
+//! 1. the samples of 3 antennas × 8 satellites (2.6 Msps complex, 45 dB-Hz, the example
+//!    flight's attitude, lines of sight and line biases as the embedded truth) are synthesized
+//!    in 2 ms blocks into one static buffer ([`synth`]), outside the counted region;
+//! 2. acquisition before the counted region: every PRN searched on the reference antenna's
+//!    first 4 ms (±2.5 kHz); the receiver gets the lines of sight as its aiding and the gyro's
+//!    increments;
+//! 3. warm-up until the attitude comes from the fine filter, [`run::SETTLE_MS`] more, then
+//!    [`run::COUNT_MS`] of blocks, each block's `push_samples` (and the gyro increments that
+//!    end in it) between the marker instructions; the firmware prints which regions are that
+//!    front end's, `.ci/run` sums the plugin's counts into instructions per 1 ms;
+//! 4. the verdict: fine attitude within [`run::LIMIT_DEG`] of the truth, or exit failure.
+//!
+//! Then flash, static RAM and the worst stack of the whole run (painted at reset by
+//! cortex-m-rt's `paint-stack`).
+#![no_std]
+#![no_main]
+
+#[path = "realtime/frontend.rs"]
+mod frontend;
+#[path = "realtime/memory.rs"]
+mod memory;
+#[path = "realtime/run.rs"]
+mod run;
+#[path = "realtime/synth.rs"]
+mod synth;
+
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::{debug, hprintln};
+
+use frontend::FrontEnd;
+
+#[entry]
+fn main() -> ! {
+    hprintln!(
+        "realtime: SampleReceiver<{}, 1024> {} B (i8 correlators), 3 antennas x 8 satellites, 2.6 Msps complex, {} ms blocks, {} ms counted per front end",
+        run::CHANNELS,
+        core::mem::size_of::<run::Front>(),
+        run::BLOCK_MS,
+        run::COUNT_MS
+    );
+    hprintln!(
+        "sizes: acquisition {} channel {} receiver {} adapter {}",
+        core::mem::size_of::<gnss_attitude::tracking::Acquisition<1024>>(),
+        core::mem::size_of::<gnss_attitude::tracking::Channel<3>>(),
+        core::mem::size_of::<gnss_attitude::receiver::AttitudeReceiver>(),
+        core::mem::size_of::<gnss_attitude::receiver::ObservationAdapter>()
+    );
+    let mut all = true;
+    let mut stacks = [0usize; 3];
+    for front_end in FrontEnd::ALL {
+        let o = run::run(front_end);
+        hprintln!(
+            "realtime {}: regions {}..={} count {} ms of push_samples (+ gyro increments); fine from epoch {:?}; final attitude {:?}, error {} deg (limit {} deg): {}",
+            front_end.name(),
+            o.regions.0,
+            o.regions.1,
+            o.counted_ms,
+            o.fine_at,
+            o.source,
+            o.error_deg,
+            run::LIMIT_DEG,
+            if o.pass { "PASS" } else { "FAIL" }
+        );
+        all &= o.pass;
+        for (s, o) in stacks.iter_mut().zip([o.construction_stack, o.acquisition_stack, o.stream_stack]) {
+            *s = (*s).max(o);
+        }
+    }
+    let (flash, ram) = memory::flash_and_static();
+    let worst = stacks[0].max(stacks[1]).max(stacks[2]);
+    hprintln!(
+        "realtime memory: flash {} B, static RAM {} B, worst stack {} B (construction, SampleReceiver::new: {} B; acquisition: {} B; tracking, the receiver's {} B + the 1 ms block + synthesis + push_samples: {} B), RAM (static + worst stack) {} B",
+        flash,
+        ram,
+        worst,
+        stacks[0],
+        stacks[1],
+        core::mem::size_of::<run::Front>(),
+        stacks[2],
+        ram + worst
+    );
+    if all {
+        hprintln!("realtime: all PASS");
+        debug::exit(debug::EXIT_SUCCESS);
+    } else {
+        hprintln!("realtime: FAILED");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    hprintln!("HardFault at pc {:#010x}", frame.pc());
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("panic: {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::nop();
+    }
+}

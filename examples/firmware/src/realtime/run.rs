@@ -1,0 +1,307 @@
+//! One front end through the whole receiver: acquisition, warm-up to fine attitude, then the
+//! counted stretch of `push_samples`, then the verdict against the embedded truth.
+
+use core::hint::black_box;
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use cortex_m_semihosting::hprintln;
+use gnss_attitude::attitude::example::SKY;
+use gnss_attitude::receiver::example::ExampleFlight;
+use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, SampleFrontConfig, SampleReceiver, SampleReport};
+use gnss_attitude::signal::{Prn, SampleBlock};
+
+use super::frontend::FrontEnd;
+use super::memory;
+use super::synth::{Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
+
+/// Channels (one per satellite; each tracks the three antennas).
+pub const CHANNELS: usize = 8;
+/// The receiver: 8 channels, 1024-point acquisition. The correlator is today's i8 one; the
+/// bit-parallel correlator (branch `h-bitrx`) makes it a type parameter.
+pub type Front = SampleReceiver<CHANNELS, 1024>;
+/// Receiver epochs per synthesized block.
+pub const BLOCK_MS: usize = 1;
+/// Samples per antenna and component in a block.
+pub const BLOCK: usize = SAMPLES_PER_MS * BLOCK_MS;
+/// Milliseconds the acquisition sums non-coherently (the warm start's 6 ms of `.ci/run`'s
+/// acquisition figures).
+pub const ACQUISITION_MS: u16 = 6;
+/// Samples per component the acquisition searches and verifies on (`2 K` ms + 1).
+pub const ACQUISITION_SAMPLES: usize = 2 * ACQUISITION_MS as usize * SAMPLES_PER_MS + 1;
+/// The streaming sample buffer: I and Q of three antennas, one block.
+pub const BUFFER: usize = 6 * BLOCK;
+/// Longest warm-up to fine attitude, receiver epochs (ms).
+pub const WARM_UP_MAX_MS: u64 = 3000;
+/// Epochs run in fine attitude before the counted stretch starts.
+pub const SETTLE_MS: u64 = 1000;
+/// Counted epochs (ms) per front end.
+pub const COUNT_MS: u64 = 200;
+/// Largest attitude error accepted at the end, degrees.
+pub const LIMIT_DEG: f32 = 0.1;
+
+static REGION: AtomicU32 = AtomicU32::new(0);
+
+/// Calls `f` in a frame of its own.
+#[inline(never)]
+fn call<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
+/// Runs `f` between the instruction-count markers that `.ci/insnmark.c` counts (`mov r8, r8`
+/// … `mov r9, r9`, as `budget::measure` in the self-check); returns the region's number.
+#[inline(never)]
+fn count<R>(f: impl FnOnce() -> R) -> (u32, R) {
+    let n = REGION.fetch_add(1, Ordering::Relaxed);
+    // SAFETY: the markers are register-to-self moves with no effect on program state.
+    unsafe { core::arch::asm!("mov r8, r8") };
+    let out = call(f);
+    unsafe { core::arch::asm!("mov r9, r9") };
+    (n, black_box(out))
+}
+
+/// The front half's configuration: complex 2.6 Msps, LEO channels, a warm search (Doppler
+/// within ±2.5 kHz, [`ACQUISITION_MS`] non-coherent: the flight computer knows the almanac, time and
+/// orbit), false alarms 10⁻³ per PRN search.
+pub fn front_config() -> SampleFrontConfig {
+    let mut c = SampleFrontConfig::leo_complex(SAMPLE_RATE_HZ);
+    c.acquisition.doppler_max_hz = 2500.0;
+    c.acquisition.noncoherent_ms = ACQUISITION_MS;
+    c.acquisition.false_alarm_probability = 1e-3;
+    c
+}
+
+/// What one front end's run gave.
+pub struct Outcome {
+    /// Receiver epoch at which the attitude first came from the fine filter.
+    pub fine_at: Option<u64>,
+    /// First and last counted region.
+    pub regions: (u32, u32),
+    /// Counted epochs.
+    pub counted_ms: u64,
+    /// Final attitude's source and error against the truth, degrees.
+    pub source: AttitudeSource,
+    /// Attitude error at the end, degrees.
+    pub error_deg: f32,
+    /// Worst stack of the receiver's construction (`SampleReceiver::new`), bytes from the
+    /// stack's top.
+    pub construction_stack: usize,
+    /// Worst stack of the acquisition (the receiver in `run`'s frame, the searched samples,
+    /// the search), bytes from the stack's top.
+    pub acquisition_stack: usize,
+    /// Worst stack while tracking (the receiver in `run`'s frame, the block buffer, the
+    /// synthesis and the receiver's work), bytes from the stack's top.
+    pub stream_stack: usize,
+    /// The run passed (fine attitude within [`LIMIT_DEG`], no refusal).
+    pub pass: bool,
+}
+
+/// Acquisition: every PRN of the sky searched on the reference antenna's first
+/// [`ACQUISITION_SAMPLES`] (its own buffer, in this frame: gone before the stream's).
+/// Returns the number detected.
+#[inline(never)]
+fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd) -> usize {
+    let mut ai = [0i8; ACQUISITION_SAMPLES];
+    let mut aq = [0i8; ACQUISITION_SAMPLES];
+    let first = synth.next_sample();
+    synth.fill(front_end, &mut [&mut ai[..]], &mut [&mut aq[..]]);
+    let (ai, aq) = (&ai[..], &aq[..]);
+    let mut detected = 0;
+    for (s, (prn, _, _)) in SKY.iter().enumerate() {
+        let Some(prn) = Prn::new(*prn) else { continue };
+        match rx.search(prn, ai, Some(aq), first) {
+            Ok(r) => {
+                detected += usize::from(r.detected);
+                hprintln!(
+                    "realtime {}: search PRN {}: detected {} Doppler {} Hz (truth {}), code phase {} chips (truth {})",
+                    front_end.name(),
+                    prn.number(),
+                    r.detected,
+                    r.doppler_hz,
+                    DOPPLER_HZ[s],
+                    r.code_phase_chips,
+                    CODE_PHASE_CHIPS[s]
+                );
+            }
+            Err(e) => hprintln!("realtime {}: search PRN {} refused: {:?}", front_end.name(), prn.number(), e),
+        }
+    }
+    detected
+}
+
+/// The whole run of one front end: the receiver built (on the stack, bound inside its
+/// `Result`: one copy of its 70 KB), then [`stream`] in a frame of its own.
+#[inline(never)]
+pub fn run(front_end: FrontEnd) -> Outcome {
+    // (through an opaque function pointer: `new` keeps a frame of its own instead of
+    // inlining its temporaries into this one)
+    let new: fn(ReceiverConfig, SampleFrontConfig) -> Result<Front, ReceiverError> = black_box(Front::new);
+    let mut made = new(ExampleFlight::config(true), front_config());
+    match made.as_mut() {
+        Ok(rx) => {
+            // the construction's high-water mark, then the stream's own
+            let sp = memory::sp();
+            let built = memory::stack_top() - sp + memory::used_below(sp);
+            memory::paint_below();
+            let mut out = stream(front_end, rx);
+            out.construction_stack = built;
+            out.stream_stack = memory::stack_top() - sp + memory::used_below(sp);
+            out
+        }
+        Err(e) => {
+            hprintln!("realtime {}: receiver refused its configuration: {:?}", front_end.name(), e);
+            Outcome {
+                fine_at: None,
+                regions: (0, 0),
+                counted_ms: 0,
+                source: AttitudeSource::None,
+                error_deg: f32::NAN,
+                pass: false,
+                stream_stack: 0,
+                construction_stack: 0,
+                acquisition_stack: 0,
+            }
+        }
+    }
+}
+
+/// Acquisition, warm-up, the counted stretch and the verdict. The sample buffer is this
+/// frame's: it takes the stack the receiver's construction used (its temporaries are gone),
+/// so the two never coexist (a static buffer would add to the construction's peak).
+/// The stack below this frame is painted again first: the stream's own high-water mark is
+/// reported apart from the construction's.
+#[inline(never)]
+fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
+    let mut buf = [0i8; BUFFER];
+    let mut out = Outcome {
+        fine_at: None,
+        regions: (0, 0),
+        counted_ms: 0,
+        source: AttitudeSource::None,
+        error_deg: f32::NAN,
+        pass: false,
+        stream_stack: 0,
+        construction_stack: 0,
+        acquisition_stack: 0,
+    };
+    let seed = match front_end {
+        FrontEnd::OneBit => 0x1B17,
+        FrontEnd::TwoBit => 0x2B17,
+    };
+    let mut synth = Synth::new(seed);
+    let sp = memory::sp();
+    let detected = acquire(rx, &mut synth, front_end);
+    out.acquisition_stack = memory::stack_top() - sp + memory::used_below(sp);
+    memory::paint_below();
+    // the stream continues on the receiver's 1 ms grid
+    let start = synth.next_sample().div_ceil(SAMPLES_PER_MS as u64) * SAMPLES_PER_MS as u64;
+    synth.skip(start - synth.next_sample());
+
+    let mut refusals = 0u32;
+    let mut total = SampleReport::default();
+    let mut gyro_next = 0u64;
+    let mut first_region = None;
+    let mut last_region = 0;
+    loop {
+        let first = synth.next_sample();
+        let e0 = first / SAMPLES_PER_MS as u64;
+        if e0 % 100 < BLOCK_MS as u64 || first == start {
+            refusals += u32::from(rx.receiver_mut().set_aiding(&synth.flight().aiding(e0)).is_err());
+        }
+        synth.set_geometry(e0);
+        let (i, q) = buf.split_at_mut(3 * BLOCK);
+        let (i0, i) = i.split_at_mut(BLOCK);
+        let (i1, i2) = i.split_at_mut(BLOCK);
+        let (q0, q) = q.split_at_mut(BLOCK);
+        let (q1, q) = q.split_at_mut(BLOCK);
+        let (q2, _) = q.split_at_mut(BLOCK);
+        synth.fill(front_end, &mut [&mut *i0, &mut *i1, &mut *i2], &mut [&mut *q0, &mut *q1, &mut *q2]);
+        let Ok(block) = SampleBlock::complex(first, [&*i0, &*i1, &*i2], [&*q0, &*q1, &*q2]) else {
+            hprintln!("realtime {}: block refused", front_end.name());
+            return out;
+        };
+        let counting = out.fine_at.is_some_and(|f| e0 >= f + SETTLE_MS);
+        let flight = synth.flight();
+        // the receiver's work of one block: the gyro increments that end in it, its samples
+        let work = |rx: &mut Front, gyro_next: &mut u64| {
+            let mut refused = 0u32;
+            while 10 * (*gyro_next + 1) < e0 + BLOCK_MS as u64 {
+                refused += u32::from(rx.receiver_mut().push_gyro_increment(&flight.gyro_increment(*gyro_next)).is_err());
+                *gyro_next += 1;
+            }
+            (refused, rx.push_samples(black_box(&block)))
+        };
+        let (refused, report) = if counting {
+            let (n, r) = count(|| work(&mut *rx, &mut gyro_next));
+            first_region.get_or_insert(n);
+            last_region = n;
+            out.counted_ms += BLOCK_MS as u64;
+            r
+        } else {
+            work(&mut *rx, &mut gyro_next)
+        };
+        refusals += refused;
+        match report {
+            Ok(r) => {
+                total.epochs += r.epochs;
+                total.observations += r.observations;
+                total.without_aiding += r.without_aiding;
+                total.late += r.late;
+                total.released += r.released;
+            }
+            Err(e) => {
+                hprintln!("realtime {}: push_samples refused at epoch {}: {:?}", front_end.name(), e0, e);
+                refusals += 1;
+                break;
+            }
+        }
+        let att = rx.attitude();
+        if out.fine_at.is_none() && att.source == AttitudeSource::Fine {
+            out.fine_at = Some(e0 + BLOCK_MS as u64);
+            hprintln!(
+                "realtime {}: fine attitude at epoch {} ({} observations, {} channels locked)",
+                front_end.name(),
+                e0 + BLOCK_MS as u64,
+                total.observations,
+                rx.channels().filter(|c| c.locked).count()
+            );
+        }
+        if out.fine_at.is_some() && (e0 + BLOCK_MS as u64) % 100 == 0 {
+            let e = att.q_rb.angle_to(&synth.truth(att.epoch)).to_degrees();
+            let sigma = nalgebra::ComplexField::sqrt(att.covariance.trace().max(0.0)).to_degrees();
+            hprintln!("realtime {}: epoch {} source {:?} error {} deg (1 sigma {} deg)", front_end.name(), att.epoch, att.source, e, sigma);
+        }
+        if out.counted_ms >= COUNT_MS {
+            break;
+        }
+        if out.fine_at.is_none() && e0 >= WARM_UP_MAX_MS {
+            hprintln!("realtime {}: no fine attitude after {} ms", front_end.name(), e0);
+            break;
+        }
+    }
+    let att = rx.attitude();
+    out.source = att.source;
+    out.error_deg = att.q_rb.angle_to(&synth.truth(att.epoch)).to_degrees();
+    out.regions = (first_region.unwrap_or(0), last_region);
+    out.pass = detected == SKY.len()
+        && out.fine_at.is_some()
+        && out.counted_ms >= COUNT_MS
+        && att.source == AttitudeSource::Fine
+        && out.error_deg.is_finite()
+        && out.error_deg <= LIMIT_DEG
+        && refusals == 0;
+    let cn0 = rx.channels().map(|c| c.cn0_dbhz).fold(0.0f32, |a, c| a + c) / rx.channels().count().max(1) as f32;
+    hprintln!(
+        "realtime {}: {} of {} satellites acquired, {} channels locked (mean C/N0 {} dB-Hz), {} observations, {} late, {} without aiding, {} channels released, {} calls refused",
+        front_end.name(),
+        detected,
+        SKY.len(),
+        rx.channels().filter(|c| c.locked).count(),
+        cn0,
+        total.observations,
+        total.late,
+        total.without_aiding,
+        total.released,
+        refusals
+    );
+    out
+}
