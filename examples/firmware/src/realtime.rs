@@ -7,17 +7,20 @@
 //! 1. the samples of 3 antennas × 8 satellites (2.6 Msps complex, 45 dB-Hz, the example
 //!    flight's attitude, lines of sight and line biases as the embedded truth) are synthesized
 //!    in 2 ms blocks into one static buffer ([`synth`]), outside the counted region;
-//! 2. acquisition before the counted region: every PRN searched on the reference antenna's
-//!    first 4 ms (±2.5 kHz); the receiver gets the lines of sight as its aiding and the gyro's
-//!    increments;
+//! 2. acquisition before the counted region: every PRN searched (`SampleReceiver::search`, ±2.5
+//!    kHz, 6 ms non-coherent + the 6 ms dwell) on the reference antenna's first 12 ms; the
+//!    receiver gets the lines of sight as its aiding (every 100 ms) and the gyro's increments;
 //! 3. warm-up until the attitude comes from the fine filter, [`run::SETTLE_MS`] more, then
 //!    [`run::COUNT_MS`] of blocks, each block's `push_samples` (and the gyro increments that
 //!    end in it) between the marker instructions; the firmware prints which regions are that
 //!    front end's, `.ci/run` sums the plugin's counts into instructions per 1 ms;
 //! 4. the verdict: fine attitude within [`run::LIMIT_DEG`] of the truth, or exit failure.
 //!
-//! Then flash, static RAM and the worst stack of the whole run (painted at reset by
-//! cortex-m-rt's `paint-stack`).
+//! Then flash, static RAM and the worst stack (painted at reset by cortex-m-rt's
+//! `paint-stack`, repainted after the construction and after the acquisition to measure each
+//! phase). Linked for QEMU's `mps2-an386` (feature `qemu-mps2`, 4 MiB RAM): the receiver's
+//! construction (`SampleReceiver::new`, by value: its frame alone is 123 KB) does not fit an
+//! STM32F405's 128 KiB; the firmware prints what each phase needs against that target.
 #![no_std]
 #![no_main]
 
@@ -45,7 +48,7 @@ fn main() -> ! {
         run::COUNT_MS
     );
     hprintln!(
-        "sizes: acquisition {} channel {} receiver {} adapter {}",
+        "realtime sizes: Acquisition<1024> {} B, Channel<3> {} B (x 8), AttitudeReceiver {} B, ObservationAdapter {} B",
         core::mem::size_of::<gnss_attitude::tracking::Acquisition<1024>>(),
         core::mem::size_of::<gnss_attitude::tracking::Channel<3>>(),
         core::mem::size_of::<gnss_attitude::receiver::AttitudeReceiver>(),

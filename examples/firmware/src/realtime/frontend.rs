@@ -3,8 +3,14 @@
 //!
 //! Today the receiver's correlator takes `i8` samples, so each quantized level is handed over
 //! as the `i8` value host-sim uses for the same front end (`host-sim/src/synth/quantize.rs`):
-//! 1-bit `±16`, 2-bit `±8, ±24` (threshold 1σ). The bit-parallel path (branch `h-bitrx`) swaps
-//! [`FrontEnd::quantize`] for packing into bit planes; the synthesis and the counted loop stay.
+//! 1-bit `±16`, 2-bit `±8, ±24` (threshold 1σ).
+//!
+//! Swapping in the bit-parallel correlator (branch `h-bitrx`, `SampleReceiver` generic over the
+//! correlator): `run::Front` names the receiver type; `run::stream` builds each 1 ms block from
+//! the buffer the synthesizer fills. For the bit path, the synthesizer's output goes through
+//! the core's packing (the sign and magnitude bit planes of each antenna, from these same `i8`
+//! levels or from the front end's byte layout) into the block type the bit correlator takes,
+//! and `Front` gets its correlator parameter; the acquisition keeps the `i8` samples.
 
 /// A front end: how many bits per component the ADC delivers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
