@@ -9,6 +9,7 @@ use gnss_attitude::attitude::example::SKY;
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, SampleFrontConfig, SampleReceiver, SampleReport};
 use gnss_attitude::signal::{Prn, SampleBlock};
+use gnss_attitude::tracking::TrackingError;
 
 use super::frontend::FrontEnd;
 use super::memory;
@@ -68,6 +69,17 @@ pub fn front_config() -> SampleFrontConfig {
     c.acquisition.noncoherent_ms = ACQUISITION_MS;
     c.acquisition.false_alarm_probability = 1e-3;
     c
+}
+
+/// One block of the stream handed to the receiver (counted): the front end's samples of the
+/// three antennas, `i`/`q`, first sample `first`. The one place the bit-parallel path changes
+/// (with `Front`): there the front end's bytes are packed into the antennas' bit planes here
+/// (`PlaneBuffer::pack_bytes`, counted as the receiver's work) and the receiver built with
+/// `SampleReceiver::with_settings` takes the `BitBlock`.
+#[inline(always)]
+fn push_block(rx: &mut Front, first: u64, i: [&[i8]; 3], q: [&[i8]; 3]) -> Result<SampleReport, ReceiverError> {
+    let block = SampleBlock::complex(first, i, q).map_err(|e| ReceiverError::Tracking(TrackingError::Signal(e)))?;
+    rx.push_samples(&block)
 }
 
 /// What one front end's run gave.
@@ -215,10 +227,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         let (q1, q) = q.split_at_mut(BLOCK);
         let (q2, _) = q.split_at_mut(BLOCK);
         synth.fill(front_end, &mut [&mut *i0, &mut *i1, &mut *i2], &mut [&mut *q0, &mut *q1, &mut *q2]);
-        let Ok(block) = SampleBlock::complex(first, [&*i0, &*i1, &*i2], [&*q0, &*q1, &*q2]) else {
-            hprintln!("realtime {}: block refused", front_end.name());
-            return out;
-        };
+        let (i, q) = ([&*i0, &*i1, &*i2], [&*q0, &*q1, &*q2]);
         let counting = out.fine_at.is_some_and(|f| e0 >= f + SETTLE_MS);
         let flight = synth.flight();
         // the receiver's work of one block: the gyro increments that end in it, its samples
@@ -228,7 +237,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
                 refused += u32::from(rx.receiver_mut().push_gyro_increment(&flight.gyro_increment(*gyro_next)).is_err());
                 *gyro_next += 1;
             }
-            (refused, rx.push_samples(black_box(&block)))
+            (refused, push_block(rx, first, black_box(i), black_box(q)))
         };
         let (refused, report) = if counting {
             let (n, r) = count(|| work(&mut *rx, &mut gyro_next));
