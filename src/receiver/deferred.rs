@@ -71,16 +71,18 @@ impl AttitudeReceiver {
     /// any. Call it after every closed block (within 20 ms of it) from a context the 1 ms
     /// epochs may interrupt, in deferred mode ([`Self::set_deferred_stages`]).
     pub fn run_deferred(&mut self) -> bool {
+        if !self.has_deferred_work() {
+            return false;
+        }
         let block = self.deferred.block.take();
         let window = self.deferred.window.take();
-        let any = block.is_some() || window.is_some();
         if let Some(work) = block {
             self.run_block(&work);
         }
         if let Some(work) = window {
             self.run_window(&work);
         }
-        any
+        true
     }
 
     /// Closings (blocks or windows) that found the previous work still waiting, so that the

@@ -324,6 +324,8 @@ pub struct AttitudeReceiver {
     windows: u64,
     /// Block and window work captured and waiting, in deferred mode.
     deferred: Deferred,
+    /// The epoch in whole nanoseconds (the 1 ms path's integer clock).
+    epoch_ns: u64,
 }
 
 impl AttitudeReceiver {
@@ -375,6 +377,7 @@ impl AttitudeReceiver {
             health: ReceiverHealth::default(),
             windows: 0,
             deferred: Deferred::default(),
+            epoch_ns: gyro_frame::nanoseconds(config.epoch_s),
         })
     }
 
