@@ -77,7 +77,7 @@ echo "  storage: GaReceiver $(sed -n 's/.*GaReceiver \([0-9]*\) B reserved (\([0
 grep '^stack:' "$ROOT/target/ci/c-qemu.log" | sed 's/^/  /'
 calls=$(sed -n 's/^calls: //p' "$ROOT/target/ci/c-qemu.log")
 grep -o 'insnmark: region [0-9]*: [0-9]* instructions' "$ROOT/target/ci/c-insn.log" | awk -v calls="$calls" '
-BEGIN { n_names = split("I:ga_receiver_init A:ga_receiver_set_aiding G:ga_receiver_push_gyro_increment O:ga_receiver_push_observation C:ga_receiver_close_through T:ga_receiver_attitude E:ga_receiver_pop_event N:ga_format_nmea R:ga_format_record", m, " ")
+BEGIN { n_names = split("I:ga_receiver_init A:ga_receiver_set_aiding G:ga_receiver_push_gyro_increment O:ga_receiver_push_observation C:ga_receiver_close_through D:ga_receiver_run_deferred T:ga_receiver_attitude E:ga_receiver_pop_event N:ga_format_nmea R:ga_format_record", m, " ")
         for (i = 1; i <= n_names; i++) { split(m[i], kv, ":"); name[kv[1]] = kv[2]; order[i] = kv[1] } }
 { r = $3 + 0; c = substr(calls, r + 1, 1); n[c]++; s[c] += $4; if ($4 > mx[c]) mx[c] = $4 }
 END { for (i = 1; i <= n_names; i++) { c = order[i]; if (n[c]) printf "  %-34s %5d calls  worst %8d  mean %8.0f instructions\n", name[c], n[c], mx[c], s[c] / n[c] } }'

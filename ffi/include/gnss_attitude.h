@@ -12,8 +12,9 @@
 #include <stdbool.h>
 
 // Version of this C ABI: bumped when a mirror or a signature changes incompatibly (a field
-// added to a mirror is such a change: C code must be rebuilt against the new header).
-#define GA_ABI_VERSION 1
+// added to a mirror is such a change: C code must be rebuilt against the new header). 2: the
+// receiver storage grew to 10 KiB (`GA_RECEIVER_WORDS` 1280) for the deferred stages.
+#define GA_ABI_VERSION 2
 
 // 64-bit words of a [`GaExampleFlight`].
 #define GA_EXAMPLE_FLIGHT_WORDS 32
@@ -31,7 +32,7 @@
 #define GA_NMEA_MAX 82
 
 // 64-bit words of a [`GaReceiver`]'s storage.
-#define GA_RECEIVER_WORDS 1152
+#define GA_RECEIVER_WORDS 1280
 
 // Bytes of a [`GaReceiver`] (`GA_RECEIVER_WORDS × 8`): the receiver takes 7.2 KiB on a
 // 32-bit target and 8.3 KiB on a 64-bit host; the rest is room for fields to come.
@@ -723,6 +724,30 @@ GaStatus ga_receiver_push_gyro_pulses(GaReceiver *storage, const int32_t *counts
 // # Safety
 // `storage` as for [`ga_receiver_init`].
 GaStatus ga_receiver_close_through(GaReceiver *storage, uint64_t epoch);
+
+// Moves the block and window stages out of the epoch path (`deferred` true): the epoch that
+// closes a block or a window only captures its single differences, and
+// [`ga_receiver_run_deferred`] runs the stages (call it from the main loop while the 1 ms
+// interrupt pushes observations). False (the default) runs them inside the epoch, and runs
+// any waiting work at once.
+//
+// # Safety
+// `storage` as for [`ga_receiver_init`].
+GaStatus ga_receiver_set_deferred_stages(GaReceiver *storage, bool deferred);
+
+// Runs the waiting block and window work (deferred mode); `*ran` tells whether there was
+// any. Call it within 20 ms of every closed block; work still waiting when the next block
+// closes is run by that epoch and counted ([`ga_receiver_deferred_overruns`]).
+//
+// # Safety
+// `storage` as for [`ga_receiver_init`]; `ran` is writable.
+GaStatus ga_receiver_run_deferred(GaReceiver *storage, bool *ran);
+
+// Closings that found deferred work still waiting (run then, in the epoch path).
+//
+// # Safety
+// `storage` as for [`ga_receiver_init`]; `out` is writable.
+GaStatus ga_receiver_deferred_overruns(GaReceiver *storage, uint32_t *out);
 
 // The attitude now, with its covariance, source and health.
 //

@@ -47,8 +47,9 @@ pub use status::*;
 pub use types::*;
 
 /// Version of this C ABI: bumped when a mirror or a signature changes incompatibly (a field
-/// added to a mirror is such a change: C code must be rebuilt against the new header).
-pub const GA_ABI_VERSION: u32 = 1;
+/// added to a mirror is such a change: C code must be rebuilt against the new header). 2: the
+/// receiver storage grew to 10 KiB (`GA_RECEIVER_WORDS` 1280) for the deferred stages.
+pub const GA_ABI_VERSION: u32 = 2;
 
 /// The ABI version the library was built with (compare with [`GA_ABI_VERSION`] of the header
 /// the C code was compiled against).

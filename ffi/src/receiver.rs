@@ -21,7 +21,7 @@ use crate::status::{Failure, GaCall, GaError, GaStatus};
 use crate::types::{GaAiding, GaAttitude, GaConfig, GaEvent, GaEventKind, GaObservation};
 
 /// 64-bit words of a [`GaReceiver`]'s storage.
-pub const GA_RECEIVER_WORDS: usize = 1152;
+pub const GA_RECEIVER_WORDS: usize = 1280;
 /// Bytes of a [`GaReceiver`] (`GA_RECEIVER_WORDS × 8`): the receiver takes 7.2 KiB on a
 /// 32-bit target and 8.3 KiB on a 64-bit host; the rest is room for fields to come.
 pub const GA_RECEIVER_SIZE: usize = GA_RECEIVER_WORDS * 8;
@@ -390,6 +390,72 @@ pub unsafe extern "C" fn ga_receiver_close_through(
     unsafe {
         with_receiver(storage, |rx| {
             rx.close_through(epoch);
+            Ok(GaStatus::Ok)
+        })
+    }
+}
+
+/// Moves the block and window stages out of the epoch path (`deferred` true): the epoch that
+/// closes a block or a window only captures its single differences, and
+/// [`ga_receiver_run_deferred`] runs the stages (call it from the main loop while the 1 ms
+/// interrupt pushes observations). False (the default) runs them inside the epoch, and runs
+/// any waiting work at once.
+///
+/// # Safety
+/// `storage` as for [`ga_receiver_init`].
+#[no_mangle]
+pub unsafe extern "C" fn ga_receiver_set_deferred_stages(
+    storage: *mut GaReceiver,
+    deferred: bool,
+) -> GaStatus {
+    // SAFETY: the caller's contract.
+    unsafe {
+        with_receiver(storage, |rx| {
+            rx.set_deferred_stages(deferred);
+            Ok(GaStatus::Ok)
+        })
+    }
+}
+
+/// Runs the waiting block and window work (deferred mode); `*ran` tells whether there was
+/// any. Call it within 20 ms of every closed block; work still waiting when the next block
+/// closes is run by that epoch and counted ([`ga_receiver_deferred_overruns`]).
+///
+/// # Safety
+/// `storage` as for [`ga_receiver_init`]; `ran` is writable.
+#[no_mangle]
+pub unsafe extern "C" fn ga_receiver_run_deferred(
+    storage: *mut GaReceiver,
+    ran: *mut bool,
+) -> GaStatus {
+    let call = GaCall::Output;
+    // SAFETY: the caller's contract.
+    unsafe {
+        with_receiver(storage, |rx| {
+            let any = rx.run_deferred();
+            // (inside the caller's unsafe block) the caller's contract: `ran` is writable
+            ptr::write(ran, any).map_err(abi(call))?;
+            Ok(GaStatus::Ok)
+        })
+    }
+}
+
+/// Closings that found deferred work still waiting (run then, in the epoch path).
+///
+/// # Safety
+/// `storage` as for [`ga_receiver_init`]; `out` is writable.
+#[no_mangle]
+pub unsafe extern "C" fn ga_receiver_deferred_overruns(
+    storage: *mut GaReceiver,
+    out: *mut u32,
+) -> GaStatus {
+    let call = GaCall::Output;
+    // SAFETY: the caller's contract.
+    unsafe {
+        with_receiver(storage, |rx| {
+            let n = rx.deferred_overruns();
+            // (inside the caller's unsafe block) the caller's contract: `out` is writable
+            ptr::write(out, n).map_err(abi(call))?;
             Ok(GaStatus::Ok)
         })
     }

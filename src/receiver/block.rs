@@ -7,6 +7,9 @@ use heapless::Vec;
 use crate::attitude::gyro_aided::{GyroAidedReport, PhaseDifferenceBlock};
 use crate::attitude::one_stage::{LockStatus, SatelliteObservation};
 
+use crate::geometry::Quaternion;
+
+use super::deferred::BlockWork;
 use super::satellite::BlockSd;
 use super::{AttitudeReceiver, ReceiverEvent, MAX_SATELLITES};
 
@@ -14,8 +17,10 @@ use super::{AttitudeReceiver, ReceiverEvent, MAX_SATELLITES};
 use super::ReceiverConfig;
 
 impl AttitudeReceiver {
-    /// Closes the block that ends with epoch `k`: every slot's sums, then the fine update.
+    /// Closes the block that ends with epoch `k`: every slot's sums into phase differences
+    /// (the capture), then the fine update, now or deferred ([`super::deferred`]).
     pub(super) fn close_block(&mut self, k: u64) {
+        self.flush_overrun();
         let block = self.config.block_epochs;
         let start = k.saturating_add(1).saturating_sub(u64::from(block));
         // the block's centre (epoch units; a half epoch when the block is odd is rounded down)
@@ -34,13 +39,29 @@ impl AttitudeReceiver {
                 }
             }
         }
-        self.update_gyro_fine(k, centre, &blocks);
+        let m_centre = self.gyro_attitude(centre);
+        self.schedule_block(BlockWork {
+            k,
+            centre,
+            m_centre,
+            blocks,
+        });
+    }
+
+    /// The block's stage: the fine update with its phase differences.
+    pub(super) fn run_block(&mut self, work: &BlockWork) {
+        self.update_gyro_fine(work.k, work.centre, &work.m_centre, &work.blocks);
     }
 
     /// The gyro-aided update with the block's phase differences (a prediction only when
     /// there are too few, or an antenna is blocked).
-    fn update_gyro_fine(&mut self, k: u64, centre: u64, blocks: &[PhaseDifferenceBlock<f32>]) {
-        let m = self.gyro_attitude(centre);
+    fn update_gyro_fine(
+        &mut self,
+        k: u64,
+        centre: u64,
+        m: &Quaternion<f32>,
+        blocks: &[PhaseDifferenceBlock<f32>],
+    ) {
         let epoch_s = self.config.epoch_s;
         let enough = blocks.len() >= usize::from(self.config.min_fine_satellites);
         let input: &[PhaseDifferenceBlock<f32>] = if enough && !self.any_blocked() {
@@ -55,7 +76,7 @@ impl AttitudeReceiver {
             Some(stage) => {
                 let resuming =
                     !input.is_empty() && centre.saturating_sub(stage.last_update) > window;
-                resuming && stage.sigma_at(centre, &m, epoch_s) > max_sigma
+                resuming && stage.sigma_at(centre, m, epoch_s) > max_sigma
             }
         };
         if too_uncertain {
@@ -65,7 +86,7 @@ impl AttitudeReceiver {
         let Some(stage) = self.fine.as_mut().and_then(|f| f.gyro_mut()) else {
             return;
         };
-        match stage.update(centre, &m, input, epoch_s) {
+        match stage.update(centre, m, input, epoch_s) {
             Ok(report) => {
                 if report.accepted > 0 && !stage.locked {
                     stage.locked = true;

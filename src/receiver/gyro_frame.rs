@@ -62,6 +62,8 @@ pub(crate) struct GyroFrame {
     calibrator: Option<BiasCalibrator>,
     /// Samples at the start of the calibration window.
     window_start: u64,
+    /// The sample interval in whole nanoseconds (the 1 ms path's integer clock).
+    interval_ns: u64,
     /// Calibrations applied.
     pub calibrations: u32,
     /// What the calibration windows gave.
@@ -107,6 +109,7 @@ impl GyroFrame {
             bias: Vector3::zeros(),
             calibrator: None,
             window_start: 0,
+            interval_ns: nanoseconds(config.sample_interval_s),
             calibrations: 0,
             report: CalibrationReport::default(),
         })
@@ -115,6 +118,12 @@ impl GyroFrame {
     /// Time of the last increment's end, s since the receiver started.
     pub fn time_s(&self) -> f64 {
         self.samples as f64 * seconds(self.config.sample_interval_s)
+    }
+
+    /// Time of the last increment's end, ns since the receiver started (integer: no soft
+    /// float in the 1 ms path).
+    pub fn time_ns(&self) -> u128 {
+        u128::from(self.samples) * u128::from(self.interval_ns)
     }
 
     /// Re-anchors the gyro's clock at `t` seconds (after an epoch jump: the samples in between
@@ -308,6 +317,13 @@ impl GyroFrame {
 /// `0.01f32` is 0.009 999 999 776 s, whose error would add up to milliseconds over hours).
 pub(crate) fn seconds(step: f32) -> f64 {
     libm::round(f64::from(step) * 1e9) * 1e-9
+}
+
+/// A time step given in `f32` seconds in whole nanoseconds, as [`seconds`] rounds it (0 for a
+/// negative or non-finite step).
+pub(crate) fn nanoseconds(step: f32) -> u64 {
+    // (`as` saturates: NaN and negatives to 0)
+    libm::round(f64::from(step) * 1e9) as u64
 }
 
 fn map_calibration(e: CalibrationError) -> ReceiverError {

@@ -10,7 +10,7 @@ use crate::attitude::one_stage::LockStatus;
 use crate::geometry::Quaternion;
 
 use super::carrier::{cold_start, ColdFix, Windowed};
-use super::gyro_frame::seconds;
+use super::gyro_frame::{nanoseconds, seconds};
 use super::{
     AttitudeReceiver, Integrity, IntegrityCheck, LossReason, ReceiverEvent, SnapshotFix,
     StageEstimate,
@@ -269,11 +269,13 @@ impl AttitudeReceiver {
     }
 
     /// Whether the gyro's samples lag the epochs by more than [`GYRO_SILENCE_S`].
+    // (every epoch: integer nanoseconds, no soft float in the 1 ms path)
     fn gyro_silent(&self, k: u64) -> bool {
-        let t = (k as f64 + 1.0) * seconds(self.config.epoch_s);
+        let end_ns = (u128::from(k) + 1) * u128::from(self.epoch_ns);
+        let silence_ns = u128::from(nanoseconds(GYRO_SILENCE_S));
         self.gyro
             .as_ref()
-            .is_some_and(|g| t - g.time_s() > f64::from(GYRO_SILENCE_S))
+            .is_some_and(|g| end_ns.saturating_sub(g.time_ns()) > silence_ns)
     }
 
     /// After a jump of `skipped` epochs to `epoch`: a gap longer than the coast limit loses

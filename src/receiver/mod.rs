@@ -75,6 +75,27 @@
 //! Fixed size (see the README's budgets); per epoch only sums and monitors, per block one
 //! fine update, per window the least squares, the snapshot solver or the ambiguity search
 //! (bounded by the resolver's node budget).
+//!
+//! # Stages out of the 1 ms path
+//!
+//! The epoch that closes a block or a window *captures* the satellites' sums into single
+//! differences (a few hundred instructions per satellite) and *runs* the stages on them (tens
+//! to hundreds of thousands of instructions on a Cortex-M4F). Inline, the default, both
+//! happen inside [`AttitudeReceiver::push_observation`]. With
+//! [`AttitudeReceiver::set_deferred_stages`] the epoch only captures, and the work waits
+//! (with the gyro attitude at its centre) for [`AttitudeReceiver::run_deferred`], which flight
+//! software calls from a lower-priority context (the main loop, an RTOS task) while the 1 ms
+//! interrupt keeps feeding epochs:
+//!
+//! ```text
+//!  1 ms interrupt: push_observation ... block ends: capture ──► waiting (≤ 1 block + 1 window)
+//!  main loop:      run_deferred() ◄─────────────────────────────────┘
+//! ```
+//!
+//! The work must run before the next block closes (20 ms later); if it still waits then, that
+//! epoch runs it first and counts an overrun ([`AttitudeReceiver::deferred_overruns`]): nothing
+//! is dropped. Run right after the epoch that captured it, the deferred work gives the inline
+//! attitude; run later, the stages' outputs and events come that much later.
 
 mod adapter;
 #[cfg(test)]
@@ -83,6 +104,7 @@ mod antenna;
 mod block;
 mod carrier;
 mod config;
+mod deferred;
 mod epoch;
 pub mod example;
 mod fine;
@@ -127,6 +149,7 @@ use crate::tracking::{AcquisitionError, TrackingError};
 
 use antenna::AntennaMonitor;
 use carrier::body_baselines;
+use deferred::Deferred;
 use epoch::EpochBuffer;
 use fine::FineStage;
 use gyro_frame::{seconds, GyroFrame};
@@ -299,6 +322,10 @@ pub struct AttitudeReceiver {
     health: ReceiverHealth,
     /// Windows closed.
     windows: u64,
+    /// Block and window work captured and waiting, in deferred mode.
+    deferred: Deferred,
+    /// The epoch in whole nanoseconds (the 1 ms path's integer clock).
+    epoch_ns: u64,
 }
 
 impl AttitudeReceiver {
@@ -349,6 +376,8 @@ impl AttitudeReceiver {
             events: Events::default(),
             health: ReceiverHealth::default(),
             windows: 0,
+            deferred: Deferred::default(),
+            epoch_ns: gyro_frame::nanoseconds(config.epoch_s),
         })
     }
 

@@ -323,7 +323,8 @@ impl Slot {
 
     /// The line of sight at `epoch` (extrapolated from the aiding, renormalized).
     pub fn los_at(&self, epoch: u64, epoch_s: f32) -> Vector3<f32> {
-        let dt = (epoch as f64 - self.aiding.epoch as f64) as f32 * epoch_s;
+        // (two's complement: the signed epoch difference without a soft-float conversion)
+        let dt = epoch.wrapping_sub(self.aiding.epoch) as i64 as f32 * epoch_s;
         let v = Vector3::from(self.aiding.los) + Vector3::from(self.aiding.los_rate) * dt;
         let n = v.norm();
         if n > 0.5 {

@@ -14,6 +14,7 @@ use super::carrier::{
     baseline_epoch, baselines_and_velocities, cold_start, predicted_sd, snapshot, unbiased,
     FixedWindow, Windowed,
 };
+use super::deferred::WindowWork;
 use super::fine::FineStage;
 use super::{
     AttitudeReceiver, AttitudeSource, LineBias, ReceiverEvent, SnapshotFix, StageEstimate,
@@ -38,31 +39,48 @@ const MIN_RIGID_SATELLITES: usize = 4;
 const RESTART_VARIANCE: f32 = 1e-6;
 
 impl AttitudeReceiver {
-    /// The window that ends with epoch `k`.
-    // (not inlined: each stage's locals get a frame of their own, so the stack is the
-    // largest stage's, not the sum of all)
-    #[inline(never)]
+    /// The window that ends with epoch `k`: every slot's window single differences (the
+    /// capture), then the window-level stages, now or deferred ([`super::deferred`]).
     pub(super) fn close_window(&mut self, k: u64) {
+        if self.deferred.window.is_some() {
+            self.flush_overrun();
+        }
         self.windows = self.windows.saturating_add(1);
         let half = u64::from(self.config.window_epochs / 2);
         let centre = k.saturating_add(1).saturating_sub(half);
         let windows = self.collect_windows(k, centre);
         self.health.satellites_tracked = windows.len() as u8;
         let m_centre = self.gyro_attitude(centre);
+        self.schedule_window(WindowWork {
+            k,
+            number: self.windows,
+            centre,
+            m_centre,
+            windows,
+        });
+    }
+
+    /// The window's stages: the cold start until the first fix, then the ambiguity upkeep,
+    /// the snapshot monitor and the integrity check when due, and the rigid-body filter.
+    // (not inlined: each stage's locals get a frame of their own, so the stack is the
+    // largest stage's, not the sum of all)
+    #[inline(never)]
+    pub(super) fn run_window(&mut self, work: &WindowWork) {
+        let (k, centre, windows, m_centre) = (work.k, work.centre, &work.windows, &work.m_centre);
         if !self.fixed {
-            self.try_cold_start(k, centre, &windows, &m_centre);
+            self.try_cold_start(k, centre, windows, m_centre);
         } else {
-            self.maintain_ambiguities(k, centre, &windows, &m_centre);
+            self.maintain_ambiguities(k, centre, windows, m_centre);
             let due = |every: u32, windows: u64| windows % u64::from(every.max(1)) == 0;
-            let snapshot_due = due(self.config.snapshot_windows, self.windows);
-            let integrity_due = due(self.config.integrity_windows, self.windows);
+            let snapshot_due = due(self.config.snapshot_windows, work.number);
+            let integrity_due = due(self.config.integrity_windows, work.number);
             if snapshot_due {
-                self.run_snapshot(k, centre, &windows, &m_centre);
+                self.run_snapshot(k, centre, windows, m_centre);
             }
             if integrity_due {
-                self.check_integrity(k, centre, &windows, &m_centre);
+                self.check_integrity(k, centre, windows, m_centre);
             }
-            self.run_rigid_body(k, &windows);
+            self.run_rigid_body(k, windows);
         }
         self.review_excluded_gyro(k);
         self.health.satellites_fixed = crate::count(self.slots.iter().filter(|s| s.fixed())) as u8;
