@@ -136,7 +136,8 @@ mod tests {
                 r.set_aiding(&f.aiding(k)).unwrap();
             }
             if k > 0 && k % 10 == 0 {
-                r.push_gyro_increment(&f.gyro_increment(k / 10 - 1)).unwrap();
+                r.push_gyro_increment(&f.gyro_increment(k / 10 - 1))
+                    .unwrap();
             }
             for o in f.observations(k).iter() {
                 r.push_observation(k, o).unwrap();

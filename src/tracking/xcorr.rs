@@ -67,9 +67,24 @@ pub fn code_cross_correlation(
     start_chip_a: f64,
     doppler_offset_hz: f32,
 ) -> f32 {
+    let [r] = cross_correlations(a, b, lag_chips, start_chip_a, [doppler_offset_hz]);
+    r
+}
+
+/// [`code_cross_correlation`] at `D` Doppler offsets in one pass over the codes (the chip
+/// products are shared; each offset's sum is the same sequence of operations as alone, so
+/// the results are equal bit for bit). Non-finite inputs give 0.
+fn cross_correlations<const D: usize>(
+    a: Prn,
+    b: Prn,
+    lag_chips: f64,
+    start_chip_a: f64,
+    doppler_offsets_hz: [f32; D],
+) -> [f32; D] {
     let len = CA_CODE_LENGTH as f64;
-    if !(lag_chips.is_finite() && start_chip_a.is_finite() && doppler_offset_hz.is_finite()) {
-        return 0.0;
+    let finite = lag_chips.is_finite() && start_chip_a.is_finite();
+    if !(finite && doppler_offsets_hz.iter().all(|f| f.is_finite())) {
+        return [0.0; D];
     }
     let lag = lag_chips - libm::floor(lag_chips / len) * len;
     let n = libm::floor(lag) as usize % CA_CODE_LENGTH;
@@ -77,30 +92,72 @@ pub fn code_cross_correlation(
     let start = start_chip_a - libm::floor(start_chip_a / len) * len;
     let first = libm::floor(start) as usize % CA_CODE_LENGTH;
     let frac = (start - libm::floor(start)) as f32;
+    let mut phasors = doppler_offsets_hz.map(|f| ChipPhasor::new(f, frac));
     let (ca, cb) = (a.code_signs(), b.code_signs());
-    // Phasor per chip, and its starting value at chip centre ½ − frac.
-    let w = core::f32::consts::TAU * doppler_offset_hz / CA_CHIP_RATE_HZ as f32;
-    let (ws, wc) = (libm::sinf(w), libm::cosf(w));
-    let p0 = w * (0.5 - frac);
-    let (mut pr, mut pi) = (libm::cosf(p0), libm::sinf(p0));
-    let (mut sr, mut si) = (0.0f32, 0.0f32);
-    // (chip indices from the loop's count, modulo the code: every sum's bound visible)
-    for s in 0..CA_CODE_LENGTH {
-        let j = (first + s) % CA_CODE_LENGTH;
-        let jb = (first + n + s) % CA_CODE_LENGTH;
-        let jb1 = (first + n + s + 1) % CA_CODE_LENGTH;
+    // chip indices of a, of b and of b's next chip, each wrapped by one comparison
+    let wrap = |i: usize| {
+        if i >= CA_CODE_LENGTH {
+            i - CA_CODE_LENGTH
+        } else {
+            i
+        }
+    };
+    let mut j = first;
+    let mut jb = wrap(first + n);
+    let mut jb1 = wrap(jb + 1);
+    for _ in 0..CA_CODE_LENGTH {
         let x = f32::from(ca.get(j).copied().unwrap_or(1));
         let y0 = f32::from(cb.get(jb).copied().unwrap_or(1));
         let y1 = f32::from(cb.get(jb1).copied().unwrap_or(1));
         let p = x * ((1.0 - u) * y0 + u * y1);
-        sr += p * pr;
-        si += p * pi;
-        let r = pr * wc - pi * ws;
-        pi = pr * ws + pi * wc;
-        pr = r;
+        for ph in phasors.iter_mut() {
+            ph.add(p);
+        }
+        j = wrap(j + 1);
+        jb = jb1;
+        jb1 = wrap(jb1 + 1);
     }
     let scale = 1.0 / CA_CODE_LENGTH as f32;
-    (sr * sr + si * si) * scale * scale
+    phasors.map(|ph| (ph.sr * ph.sr + ph.si * ph.si) * scale * scale)
+}
+
+/// The running sum `Σ p_k e^{jw(k + ½ − frac)}` of one Doppler offset, `w` per chip.
+#[derive(Clone, Copy)]
+struct ChipPhasor {
+    /// `cos w`, `sin w`.
+    wc: f32,
+    ws: f32,
+    /// The phasor at the current chip.
+    pr: f32,
+    pi: f32,
+    /// The sum so far.
+    sr: f32,
+    si: f32,
+}
+
+impl ChipPhasor {
+    /// Starts at chip centre `½ − frac` for an offset of `doppler_offset_hz`.
+    fn new(doppler_offset_hz: f32, frac: f32) -> Self {
+        let w = core::f32::consts::TAU * doppler_offset_hz / CA_CHIP_RATE_HZ as f32;
+        let p0 = w * (0.5 - frac);
+        Self {
+            wc: libm::cosf(w),
+            ws: libm::sinf(w),
+            pr: libm::cosf(p0),
+            pi: libm::sinf(p0),
+            sr: 0.0,
+            si: 0.0,
+        }
+    }
+
+    /// Adds the chip product `p` and turns the phasor by one chip.
+    fn add(&mut self, p: f32) {
+        self.sr += p * self.pr;
+        self.si += p * self.pi;
+        let r = self.pr * self.wc - self.pi * self.ws;
+        self.pi = self.pr * self.ws + self.pi * self.wc;
+        self.pr = r;
+    }
 }
 
 /// A signal as the cross-correlation test sees it: code phase and rate at a receiver sample,
@@ -173,16 +230,11 @@ fn largest_fraction(victim: &SignalProbe, other: &SignalProbe, test: &CrossCorre
         tau_a
     };
     let offset = other.doppler_hz - victim.doppler_hz;
+    let offsets = GRID_DOPPLER_FRACTIONS.map(|df| offset + df * test.doppler_tolerance_hz);
     let mut best = 0.0f32;
     for &dl in &GRID_LAG_FRACTIONS {
-        for &df in &GRID_DOPPLER_FRACTIONS {
-            let r = code_cross_correlation(
-                other.prn,
-                victim.prn,
-                tau_b - tau_a + dl * test.lag_tolerance_chips,
-                start,
-                offset + df * test.doppler_tolerance_hz,
-            );
+        let lag = tau_b - tau_a + dl * test.lag_tolerance_chips;
+        for r in cross_correlations(other.prn, victim.prn, lag, start, offsets) {
             best = best.max(r);
         }
     }
@@ -256,6 +308,22 @@ mod tests {
         }
         let half = code_cross_correlation(prn(5), prn(5), 0.5, 0.0, 0.0);
         assert!((half - 0.25).abs() < 0.01, "{half}");
+    }
+
+    /// One pass over the codes for several Doppler offsets gives each offset's value alone,
+    /// bit for bit (the test's grid relies on it).
+    #[test]
+    fn several_offsets_in_one_pass_equal_each_offset_alone() {
+        for &(a, b, lag, start) in &[
+            (1u8, 2u8, 17.3, 300.4),
+            (7, 12, 1022.9, 0.0),
+            (5, 5, 0.0, 511.5),
+        ] {
+            let offsets = [-1250.0f32, 3.5, 1999.0];
+            let together = cross_correlations(prn(a), prn(b), lag, start, offsets);
+            let alone = offsets.map(|f| code_cross_correlation(prn(a), prn(b), lag, start, f));
+            assert_eq!(together.map(f32::to_bits), alone.map(f32::to_bits));
+        }
     }
 
     /// Against a sample-level f64 correlation of the two codes with a Doppler offset (what a
