@@ -51,7 +51,10 @@ fn scene(seed: u64) -> Scene {
     let c_rb0 = Matrix3::from_fn(|r, c| f64::from(dcm[(r, c)]));
     Scene {
         satellites,
-        antennas_b: antennas().iter().map(|p| Vector3::from(*p).cast::<f64>()).collect(),
+        antennas_b: antennas()
+            .iter()
+            .map(|p| Vector3::from(*p).cast::<f64>())
+            .collect(),
         line_bias_cycles: vec![0.0, 0.11, -0.19],
         attitude: AttitudeMotion::ConstantRate {
             c_rb0,
@@ -74,14 +77,14 @@ fn fly(settings: BitSettings, seconds: f64) -> (AttitudeSource, f64, usize) {
     let mut front = SampleFrontConfig::leo_complex(FS);
     front.acquisition.doppler_max_hz = 5000.0;
     front.acquisition.noncoherent_ms = 10;
-    let mut rx = Box::new(
-        BitFront::with_settings(ExampleFlight::config(false), front, settings).unwrap(),
-    );
+    let mut rx =
+        Box::new(BitFront::with_settings(ExampleFlight::config(false), front, settings).unwrap());
     let table = CodeTable::new(FS).unwrap();
     let sm2iq = SampleFormat::SignMagnitude2 { complex: true };
     let needed = front.acquisition.samples_needed();
-    let mut planes: Vec<Box<PlaneBuffer<WORDS>>> =
-        (0..3).map(|_| Box::new(PlaneBuffer::new(settings.format))).collect();
+    let mut planes: Vec<Box<PlaneBuffer<WORDS>>> = (0..3)
+        .map(|_| Box::new(PlaneBuffer::new(settings.format)))
+        .collect();
     let (mut i, mut q) = (vec![0i8; needed], vec![0i8; needed]);
     let blocks = (seconds * FS / BLOCK as f64).ceil() as u64;
     let mut observations = 0;
@@ -96,7 +99,9 @@ fn fly(settings: BitSettings, seconds: f64) -> (AttitudeSource, f64, usize) {
             let n = planes[0].planes().unpack_i8(0, &mut i, &mut q);
             assert_eq!(n, needed);
             for a in flight.aiding(0) {
-                let r = rx.search(Prn::new(a.prn).unwrap(), &i, Some(&q), first).unwrap();
+                let r = rx
+                    .search(Prn::new(a.prn).unwrap(), &i, Some(&q), first)
+                    .unwrap();
                 assert!(r.detected, "PRN {} not detected", a.prn);
             }
         }

@@ -92,8 +92,13 @@ fn track(
     for b in 0..blocks {
         let first = b * BLOCK as u64;
         let analog = sc.synthesize(first, BLOCK);
-        let cs8 = decode(SampleFormat::Cs8, &encode(SampleFormat::Cs8, &analog).unwrap(), 3, BLOCK)
-            .unwrap();
+        let cs8 = decode(
+            SampleFormat::Cs8,
+            &encode(SampleFormat::Cs8, &analog).unwrap(),
+            3,
+            BLOCK,
+        )
+        .unwrap();
         let block = SampleBlock::complex(
             first,
             [&cs8.i[0], &cs8.i[1], &cs8.i[2]],
@@ -144,10 +149,14 @@ fn phase_difference_rms(sc: &Scene, epochs: &[TrackingEpoch<3>]) -> f64 {
         if t < 1.5 || !(e.lock.phase && e.state == ChannelState::Tracking) {
             continue;
         }
-        let p = e.correlations.taps.map(|t| (f64::from(t.prompt.i), f64::from(t.prompt.q)));
+        let p = e
+            .correlations
+            .taps
+            .map(|t| (f64::from(t.prompt.i), f64::from(t.prompt.q)));
         for ant in 1..3 {
             let (a, b) = (p[0], p[ant]);
-            let measured = (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / std::f64::consts::TAU;
+            let measured =
+                (b.1 * a.0 - b.0 * a.1).atan2(b.0 * a.0 + b.1 * a.1) / std::f64::consts::TAU;
             let truth =
                 sc.truth(0, ant, t).carrier_phase_cycles - sc.truth(0, 0, t).carrier_phase_cycles;
             err2.push(wrap_cycles(measured - truth).powi(2));
@@ -193,7 +202,10 @@ fn a_bit_plane_channel_tracks_like_the_i8_channel_less_the_quantization_loss() {
             .iter()
             .position(|e| e.lock.code && e.lock.phase)
             .expect("phase lock");
-        let i8_locked_at = i8_epochs.iter().position(|e| e.lock.code && e.lock.phase).unwrap();
+        let i8_locked_at = i8_epochs
+            .iter()
+            .position(|e| e.lock.code && e.lock.phase)
+            .unwrap();
         let loss = f64::from(last_i8.cn0_dbhz - last.cn0_dbhz);
         let rms = phase_difference_rms(&sc, epochs);
         let bound = host_sim::stats::phase_difference_rms_cycles(CN0 - theory, 1e-3);
@@ -215,14 +227,25 @@ fn a_bit_plane_channel_tracks_like_the_i8_channel_less_the_quantization_loss() {
         );
         assert_eq!(settings.carrier, levels);
         assert_eq!(last.state, ChannelState::Tracking);
-        assert!(epochs[locked_at..].iter().all(|e| e.lock.code && e.lock.phase));
+        assert!(epochs[locked_at..]
+            .iter()
+            .all(|e| e.lock.code && e.lock.phase));
         // Lock within a quarter second of the i8 channel's.
-        assert!(locked_at.abs_diff(i8_locked_at) < 250, "{locked_at} vs {i8_locked_at}");
+        assert!(
+            locked_at.abs_diff(i8_locked_at) < 250,
+            "{locked_at} vs {i8_locked_at}"
+        );
         // The C/N0 estimate's spread over its 1 s window at 40–44 dB-Hz is about 0.2 dB.
-        assert!((loss - theory).abs() < 0.7, "loss {loss} dB, theory {theory} dB");
+        assert!(
+            (loss - theory).abs() < 0.7,
+            "loss {loss} dB, theory {theory} dB"
+        );
         assert!(rms < 1.15 * bound, "{rms} vs {bound}");
         assert!(common.len() >= 50, "{} bits in common", common.len());
         let same = common.iter().filter(|(a, b)| a == b).count();
-        assert!(same == 0 || same == common.len(), "data bits differ from i8");
+        assert!(
+            same == 0 || same == common.len(),
+            "data bits differ from i8"
+        );
     }
 }

@@ -357,7 +357,9 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
             end = end.saturating_add(slice).min(block.len());
             // the block up to this slice's end, shared by every channel
             let sub = block.head(end).ok_or(ReceiverError::Tracking(
-                crate::tracking::TrackingError::Signal(crate::signal::SignalError::CursorOutOfRange),
+                crate::tracking::TrackingError::Signal(
+                    crate::signal::SignalError::CursorOutOfRange,
+                ),
             ))?;
             for ((channel, status), cursor) in self.channels.iter_mut().zip(cursors.iter_mut()) {
                 // each call stops at a code period's end: at most a few per slice

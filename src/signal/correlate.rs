@@ -179,51 +179,51 @@ impl<const A: usize> Correlate<A> for Correlator<A> {
     type Error = SignalError;
 
     fn new(prn: Prn, config: &CorrelatorConfig, _: &()) -> Result<Self, SignalError> {
-        Correlator::new(prn, config)
+        Self::new(prn, config)
     }
 
     fn prn(&self) -> Prn {
-        Correlator::prn(self)
+        Self::prn(self)
     }
 
     fn sample_rate_hz(&self) -> f64 {
-        Correlator::sample_rate_hz(self)
+        Self::sample_rate_hz(self)
     }
 
     fn carrier(&self) -> CarrierNco {
-        Correlator::carrier(self)
+        Self::carrier(self)
     }
 
     fn code(&self) -> CodeNco {
-        Correlator::code(self)
+        Self::code(self)
     }
 
     fn early_late_offset_samples(&self) -> usize {
-        Correlator::early_late_offset_samples(self)
+        Self::early_late_offset_samples(self)
     }
 
     fn carrier_phase_total(&self) -> i64 {
-        Correlator::carrier_phase_total(self)
+        Self::carrier_phase_total(self)
     }
 
     fn set_carrier_frequency(&mut self, frequency_hz: f64) -> Result<(), SignalError> {
-        Correlator::set_carrier_frequency(self, frequency_hz)
+        Self::set_carrier_frequency(self, frequency_hz)
     }
 
     fn set_code_rate(&mut self, chips_per_second: f64) -> Result<(), SignalError> {
-        Correlator::set_code_rate(self, chips_per_second)
+        Self::set_code_rate(self, chips_per_second)
     }
 
     fn set_code_phase(&mut self, chips: f64) -> Result<(), SignalError> {
-        Correlator::set_code_phase(self, chips)
+        Self::set_code_phase(self, chips)
     }
 
     fn set_carrier_phase(&mut self, cycles: f64) -> Result<(), SignalError> {
-        Correlator::set_carrier_phase(self, cycles)
+        Self::set_carrier_phase(self, cycles)
     }
 
     fn reset_integration(&mut self) {
-        Correlator::reset_integration(self);
+        Self::reset_integration(self);
     }
 
     fn run(
@@ -231,7 +231,7 @@ impl<const A: usize> Correlate<A> for Correlator<A> {
         block: &SampleBlock<'_, A>,
         cursor: &mut usize,
     ) -> Result<Option<EpochCorrelations<A>>, SignalError> {
-        Correlator::run(self, block, cursor)
+        Self::run(self, block, cursor)
     }
 
     /// `127² · c / 12`: the `i8` samples' rounding (1/12 LSB² per component) through the
@@ -269,51 +269,51 @@ impl<const A: usize> Correlate<A> for BitCorrelator<A> {
             format: settings.format,
             carrier: settings.carrier,
         };
-        BitCorrelator::new(prn, &config)
+        Self::new(prn, &config)
     }
 
     fn prn(&self) -> Prn {
-        BitCorrelator::prn(self)
+        Self::prn(self)
     }
 
     fn sample_rate_hz(&self) -> f64 {
-        BitCorrelator::sample_rate_hz(self)
+        Self::sample_rate_hz(self)
     }
 
     fn carrier(&self) -> CarrierNco {
-        BitCorrelator::carrier(self)
+        Self::carrier(self)
     }
 
     fn code(&self) -> CodeNco {
-        BitCorrelator::code(self)
+        Self::code(self)
     }
 
     fn early_late_offset_samples(&self) -> usize {
-        BitCorrelator::early_late_offset_samples(self)
+        Self::early_late_offset_samples(self)
     }
 
     fn carrier_phase_total(&self) -> i64 {
-        BitCorrelator::carrier_phase_total(self)
+        Self::carrier_phase_total(self)
     }
 
     fn set_carrier_frequency(&mut self, frequency_hz: f64) -> Result<(), BitCorrelatorError> {
-        BitCorrelator::set_carrier_frequency(self, frequency_hz)
+        Self::set_carrier_frequency(self, frequency_hz)
     }
 
     fn set_code_rate(&mut self, chips_per_second: f64) -> Result<(), BitCorrelatorError> {
-        BitCorrelator::set_code_rate(self, chips_per_second)
+        Self::set_code_rate(self, chips_per_second)
     }
 
     fn set_code_phase(&mut self, chips: f64) -> Result<(), BitCorrelatorError> {
-        BitCorrelator::set_code_phase(self, chips)
+        Self::set_code_phase(self, chips)
     }
 
     fn set_carrier_phase(&mut self, cycles: f64) -> Result<(), BitCorrelatorError> {
-        BitCorrelator::set_carrier_phase(self, cycles)
+        Self::set_carrier_phase(self, cycles)
     }
 
     fn reset_integration(&mut self) {
-        BitCorrelator::reset_integration(self);
+        Self::reset_integration(self);
     }
 
     fn run(
@@ -321,7 +321,7 @@ impl<const A: usize> Correlate<A> for BitCorrelator<A> {
         block: &BitBlock<'_, A>,
         cursor: &mut usize,
     ) -> Result<Option<EpochCorrelations<A>>, BitCorrelatorError> {
-        BitCorrelator::run(self, block, cursor)
+        Self::run(self, block, cursor)
     }
 
     /// The samples are odd integers (`±1`, `±3`: a step of 2, so `4/12` per component of

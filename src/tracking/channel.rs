@@ -46,8 +46,8 @@ pub use super::refine::{
 };
 use super::xcorr::{cross_correlation_source, CrossCorrelationTest, SignalProbe};
 use crate::error::{Error, ErrorKind};
-use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::bitwise::BitCorrelatorError;
+use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::correlator::{Correlator, EpochCorrelations, Iq, Taps};
 use crate::signal::SignalError;
 use crate::signal::{Correlate, CorrelationBlock};
@@ -458,7 +458,8 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
         let floor = self.correlator.rounding_noise_per_sample(self.complex);
         self.lock_window
             .add_taps_with_floor(reference, samples, floor);
-        self.cn0_window.add_taps_with_floor(reference, samples, floor);
+        self.cn0_window
+            .add_taps_with_floor(reference, samples, floor);
         if self.lock_window.count() >= u32::from(cfg.lock_window) {
             if let Some(e) = self.lock_window.finish(t) {
                 self.lock.update(&e);
