@@ -141,3 +141,37 @@ fn a_bit_plane_receiver_reaches_fine_attitude() {
         assert!(err < 0.5, "{err}°");
     }
 }
+
+/// Existing callers compile unchanged (`SampleReceiver::<S, N>::new` is the `i8` receiver), and
+/// the bit-plane receiver refuses what its correlator cannot run: one sample per chip (the `i8`
+/// correlator takes it; the bit-parallel one needs two), the refusal keeping its cause.
+#[test]
+fn the_i8_receiver_stays_the_default_and_the_bit_receiver_refuses_its_own_limits() {
+    use gnss_attitude::receiver::{ConfigError, ReceiverError};
+    use gnss_attitude::signal::bitwise::BitCorrelatorError;
+    use gnss_attitude::signal::Correlator;
+    use gnss_attitude::tracking::TrackingError;
+    let slow = SampleFrontConfig::leo_complex(1.023e6);
+    let i8_rx: SampleReceiver<2, 1024, Correlator<3>> =
+        SampleReceiver::<2, 1024>::new(ExampleFlight::config(false), slow).unwrap();
+    assert_eq!(i8_rx.channels().count(), 0);
+    let settings = BitSettings {
+        format: PlaneFormat {
+            resolution: Resolution::OneBit,
+            complex: true,
+        },
+        carrier: CarrierLevels::Two,
+    };
+    let refused = SampleReceiver::<2, 1024, BitCorrelator<3>>::with_settings(
+        ExampleFlight::config(false),
+        slow,
+        settings,
+    )
+    .err();
+    assert_eq!(
+        refused,
+        Some(ReceiverError::InvalidConfig(ConfigError::Tracking(
+            TrackingError::Bitwise(BitCorrelatorError::InvalidConfig)
+        )))
+    );
+}
