@@ -720,6 +720,41 @@ mod tests {
     }
 
     #[test]
+    fn unpacking_gives_the_values_and_heads_keep_the_first_samples() {
+        let bytes = pseudo_bytes(200, 5);
+        for res in [Resolution::OneBit, Resolution::TwoBit] {
+            let fmt = SampleFormat::SignMagnitude2 { complex: true };
+            let pf = PlaneFormat {
+                resolution: res,
+                complex: true,
+            };
+            let mut buf = PlaneBuffer::<16>::new(pf);
+            let n = buf.pack_bytes(fmt, &bytes[..200], 0).unwrap();
+            assert_eq!(n, 400);
+            let planes = buf.planes();
+            for from in [0usize, 1, 31, 32, 77] {
+                let (mut i, mut q) = ([0i8; 512], [0i8; 100]);
+                // q shorter than the rest: it bounds the samples written
+                let got = planes.unpack_i8(from, &mut i, &mut q);
+                assert_eq!(got, 100);
+                for k in 0..got {
+                    assert_eq!(i[k], planes.value(from + k, false), "{res:?} {from} {k}");
+                    assert_eq!(q[k], planes.value(from + k, true), "{res:?} {from} {k}");
+                }
+                assert!(i[got..].iter().all(|&x| x == 0));
+            }
+            let head = planes.head(45);
+            assert_eq!(head.len(), 45);
+            assert_eq!(head.sign_i().len(), 2);
+            for k in 0..45 {
+                assert_eq!(head.value(k, true), planes.value(k, true));
+            }
+            assert_eq!(head.value(45, false), 0);
+            assert_eq!(planes.head(1000).len(), 400);
+        }
+    }
+
+    #[test]
     fn unsupported_formats_are_refused() {
         let two = PlaneFormat {
             resolution: Resolution::TwoBit,
