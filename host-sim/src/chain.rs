@@ -5,8 +5,14 @@
 //! The synthesizer is the truth; every per-epoch record carries what the metrics compare with
 //! it. Parallel: sample synthesis over sub-blocks, acquisition over PRNs, tracking over
 //! satellites (each channel is independent; the shared sample block is read-only).
+//!
+//! With a 2- or 1-bit front end ([`Quantizer::Sm2`], [`Quantizer::Bit1`]) the channels run
+//! the core's bit-parallel correlator ([`ChainChannel::Bits`]) on bit planes packed from the
+//! quantized samples, as a receiver on such a front end would; the search stays on the `i8`
+//! values of the same samples.
 
 use anyhow::{Context, Result};
+use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CodeTable, PlaneBuffer};
 use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
 use gnss_attitude::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use gnss_attitude::tracking::{
@@ -28,8 +34,8 @@ pub struct ChainParams {
     pub scene: Scene,
     /// Front-end format the samples go through (with [`Quantizer::I8`]).
     pub format: SampleFormat,
-    /// The front end's quantizer: `format` for `i8`, else 2- or 1-bit samples handed to the
-    /// correlators as `i8` values.
+    /// The front end's quantizer: `format` for `i8`, else 2- or 1-bit samples, searched as
+    /// `i8` values and tracked as bit planes by the bit-parallel correlator.
     pub quantizer: Quantizer,
     /// Acquisition set-up.
     pub acquisition: AcquisitionConfig,
@@ -102,11 +108,23 @@ pub fn samples(params: &ChainParams, first: u64, n: usize) -> Result<Planar> {
     params.quantizer.quantize(params.format, &analog, n)
 }
 
+/// The core's tracking channel on the correlator the front end calls for.
+#[derive(Clone, Debug)]
+pub enum ChainChannel {
+    /// The `i8` correlator (CS8 and the other 8- and 16-bit formats).
+    I8(Box<Channel<ANTENNAS>>),
+    /// The bit-parallel correlator (2- and 1-bit front ends).
+    Bits(Box<Channel<ANTENNAS, BitCorrelator<ANTENNAS>>>),
+}
+
+/// Plane words per antenna of one packed sub-block (131 072 samples, 64 KiB of planes).
+const PLANE_WORDS: usize = 4096;
+
 /// A tracking channel started from an acquisition of a scene satellite.
 #[derive(Clone, Debug)]
 pub struct TrackedChannel {
     /// The core's channel.
-    pub channel: Channel<ANTENNAS>,
+    pub channel: ChainChannel,
     /// Index of the satellite in the scene.
     pub scene_index: usize,
     /// The acquisition that started it.
@@ -129,6 +147,8 @@ pub struct Tracker {
     pub synthesis_seconds: f64,
     /// Wall time of the tracking channels so far, s.
     pub tracking_seconds: f64,
+    /// The bit-parallel correlators' code table (2- and 1-bit front ends).
+    code_table: Option<Box<CodeTable>>,
 }
 
 impl Tracker {
@@ -162,8 +182,18 @@ impl Tracker {
                 .position(|sat| sat.prn == s.prn.number())
             {
                 Some(k) => {
-                    let mut channel = Channel::<ANTENNAS>::new(s.prn, &params.channel)?;
-                    channel.start(s)?;
+                    let channel = match params.quantizer.bit_settings(complex) {
+                        None => {
+                            let mut c = Channel::<ANTENNAS>::new(s.prn, &params.channel)?;
+                            c.start(s)?;
+                            ChainChannel::I8(Box::new(c))
+                        }
+                        Some(settings) => {
+                            let mut c = Channel::with_settings(s.prn, &params.channel, &settings)?;
+                            c.start(s)?;
+                            ChainChannel::Bits(Box::new(c))
+                        }
+                    };
                     channels.push(TrackedChannel {
                         channel,
                         scene_index: k,
@@ -180,6 +210,12 @@ impl Tracker {
             acquisition_seconds,
             synthesis_seconds: 0.0,
             tracking_seconds: 0.0,
+            code_table: match params.quantizer.bit_settings(complex) {
+                Some(_) => Some(Box::new(CodeTable::new(
+                    params.scene.front_end.sample_rate_hz,
+                )?)),
+                None => None,
+            },
         })
     }
 
@@ -196,6 +232,14 @@ impl Tracker {
         let planar = samples(params, first, n)?;
         self.synthesis_seconds += t0.elapsed().as_secs_f64();
         let t0 = std::time::Instant::now();
+        if let (Some(settings), Some(table)) = (
+            params.quantizer.bit_settings(params.format.is_complex()),
+            self.code_table.as_deref(),
+        ) {
+            let out = track_planes(&mut self.channels, &planar, first, settings, table)?;
+            self.tracking_seconds += t0.elapsed().as_secs_f64();
+            return Ok(out);
+        }
         let iv: [&[i8]; ANTENNAS] = [&planar.i[0], &planar.i[1], &planar.i[2]];
         let sb = if params.format.is_complex() {
             SampleBlock::complex(first, iv, [&planar.q[0], &planar.q[1], &planar.q[2]])?
@@ -208,8 +252,11 @@ impl Tracker {
             .map(|ch| -> Result<Vec<TrackingEpoch<ANTENNAS>>> {
                 let mut epochs = Vec::new();
                 let mut cursor = 0;
+                let ChainChannel::I8(channel) = &mut ch.channel else {
+                    anyhow::bail!("a bit-plane channel given i8 samples");
+                };
                 while cursor < sb.len() {
-                    if let Some(e) = ch.channel.process(&sb, &mut cursor)? {
+                    if let Some(e) = channel.process(&sb, &mut cursor)? {
                         epochs.push(e);
                     }
                 }
@@ -219,6 +266,61 @@ impl Tracker {
         self.tracking_seconds += t0.elapsed().as_secs_f64();
         Ok(out)
     }
+}
+
+/// Runs the bit-plane channels over the quantized samples `planar` (first sample `first`):
+/// packs each antenna's planes ([`PLANE_WORDS`] words at a time, once for every channel) from
+/// the quantizer's `i8` levels, exactly the planes the front end's bytes give.
+fn track_planes(
+    channels: &mut [TrackedChannel],
+    planar: &Planar,
+    first: u64,
+    settings: gnss_attitude::signal::BitSettings,
+    table: &CodeTable,
+) -> Result<Vec<Vec<TrackingEpoch<ANTENNAS>>>> {
+    let n = planar.i.first().map_or(0, Vec::len);
+    let mut out = vec![Vec::new(); channels.len()];
+    let mut planes: Vec<Box<PlaneBuffer<PLANE_WORDS>>> = (0..ANTENNAS)
+        .map(|_| Box::new(PlaneBuffer::new(settings.format)))
+        .collect();
+    let step = PLANE_WORDS * 32;
+    let mut start = 0;
+    while start < n {
+        let end = (start + step).min(n);
+        for (a, p) in planes.iter_mut().enumerate() {
+            let q = planar
+                .q
+                .get(a)
+                .map_or(&[][..], |q| q.get(start..end).unwrap_or(&[]));
+            p.pack_i8(&planar.i[a][start..end], q, Quantizer::PLANE_THRESHOLD)?;
+        }
+        let block = BitBlock::new(
+            first + start as u64,
+            table,
+            [planes[0].planes(), planes[1].planes(), planes[2].planes()],
+        )?;
+        let epochs = channels
+            .par_iter_mut()
+            .map(|ch| -> Result<Vec<TrackingEpoch<ANTENNAS>>> {
+                let ChainChannel::Bits(channel) = &mut ch.channel else {
+                    anyhow::bail!("an i8 channel given bit planes");
+                };
+                let mut epochs = Vec::new();
+                let mut cursor = 0;
+                while cursor < block.len() {
+                    if let Some(e) = channel.process(&block, &mut cursor)? {
+                        epochs.push(e);
+                    }
+                }
+                Ok(epochs)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        for (o, e) in out.iter_mut().zip(epochs) {
+            o.extend(e);
+        }
+        start = end;
+    }
+    Ok(out)
 }
 
 /// Runs acquisition on the first samples, then tracks every detected scene satellite.

@@ -14,10 +14,19 @@
 //! The caller owns the sample buffers, the search schedule (which PRNs, when: with an almanac
 //! and an orbit, the ones predicted above the mask) and the navigation aiding and gyro
 //! ([`SampleReceiver::receiver_mut`]). The channels run one 1 ms slice at a time in turn, so
-//! the observations reach the receiver in epoch order whatever the block size. On a
-//! Cortex-M4F the software correlators keep up with about one channel (see the README's
-//! budgets): there a hardware correlator feeds [`AttitudeReceiver::push_observation`] directly
-//! and this type is for recorded samples and the host.
+//! the observations reach the receiver in epoch order whatever the block size.
+//!
+//! The channels run the correlator `C` ([`Correlate`]), and [`SampleReceiver::push_samples`]
+//! takes its block: decoded `i8` samples ([`SampleBlock`](crate::signal::SampleBlock)) for
+//! the default [`Correlator`], bit planes ([`BitBlock`](crate::signal::bitwise::BitBlock),
+//! packed from the front end's bytes by
+//! [`PlaneBuffer::pack_bytes`](crate::signal::bitwise::PlaneBuffer::pack_bytes)) for the
+//! bit-parallel correlator ([`SampleReceiver::with_settings`]). The search always runs on
+//! `i8` samples of the reference antenna: with bit planes the caller decodes the search's few
+//! milliseconds from the same bytes ([`SampleFormat::decode`](crate::signal::SampleFormat::decode))
+//! or unpacks its planes
+//! ([`AntennaPlanes::unpack_i8`](crate::signal::bitwise::AntennaPlanes::unpack_i8)), once per
+//! search (20 ms at 2.6 Msps: 52 k samples, a 104 KiB `i8` buffer).
 
 use heapless::Vec;
 
@@ -25,7 +34,7 @@ use super::config::ConfigError;
 use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
 use crate::receiver::ReceiverError;
 use crate::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
-use crate::signal::{Prn, SampleBlock};
+use crate::signal::{Correlate, CorrelationBlock, Correlator, Prn};
 use crate::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
@@ -111,13 +120,18 @@ pub struct SampleReport {
     pub cross_correlations: u8,
 }
 
-/// The receiver from raw samples: acquisition engine (`N`-point FFT), up to `S` channels,
-/// adapter, epoch clock and the [`AttitudeReceiver`].
+/// The receiver from raw samples: acquisition engine (`N`-point FFT), up to `S` channels on
+/// the correlator `C` (the `i8` [`Correlator`] by default, the bit-parallel
+/// [`BitCorrelator`](crate::signal::bitwise::BitCorrelator) for 1- and 2-bit front ends,
+/// made by [`SampleReceiver::with_settings`]), adapter, epoch clock and the
+/// [`AttitudeReceiver`].
 #[derive(Clone, Debug)]
-pub struct SampleReceiver<const S: usize, const N: usize> {
+pub struct SampleReceiver<const S: usize, const N: usize, C: Correlate<3> = Correlator<3>> {
     config: SampleFrontConfig,
+    /// The channels' correlator settings.
+    settings: C::Settings,
     acquisition: Acquisition<N>,
-    channels: Vec<(Channel<3>, ChannelStatus), S>,
+    channels: Vec<(Channel<3, C>, ChannelStatus), S>,
     adapter: ObservationAdapter,
     clock: EpochClock,
     receiver: AttitudeReceiver,
@@ -126,16 +140,33 @@ pub struct SampleReceiver<const S: usize, const N: usize> {
 }
 
 impl<const S: usize, const N: usize> SampleReceiver<S, N> {
-    /// A receiver with no channels.
+    /// A receiver with no channels, on the `i8` correlator.
     ///
     /// # Errors
     /// [`ReceiverError::InvalidConfig`] for an invalid receiver, acquisition, channel or
     /// adapter configuration, zero samples per epoch, or an FFT size `N` outside 1024–8192.
     pub fn new(receiver: ReceiverConfig, config: SampleFrontConfig) -> Result<Self, ReceiverError> {
+        Self::with_settings(receiver, config, ())
+    }
+}
+
+impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
+    /// A receiver with no channels, whose channels run the correlator `C` with the front-end
+    /// `settings` (a [`BitSettings`](crate::signal::BitSettings) for bit planes).
+    ///
+    /// # Errors
+    /// As [`SampleReceiver::new`]; also for settings the correlator refuses.
+    pub fn with_settings(
+        receiver: ReceiverConfig,
+        config: SampleFrontConfig,
+        settings: C::Settings,
+    ) -> Result<Self, ReceiverError> {
         let acquisition = Acquisition::<N>::new().map_err(ConfigError::from)?;
         // the channel configuration is validated by a trial channel
-        Channel::<3>::new(Prn::FIRST, &config.channel).map_err(ConfigError::from)?;
+        Channel::<3, C>::with_settings(Prn::FIRST, &config.channel, &settings)
+            .map_err(ConfigError::from)?;
         Ok(Self {
+            settings,
             adapter: ObservationAdapter::new(config.adapter).map_err(ConfigError::Adapter)?,
             clock: EpochClock::new(config.epoch_origin_sample, config.samples_per_epoch)
                 .map_err(ConfigError::Adapter)?,
@@ -283,7 +314,8 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         if self.channels.is_full() {
             return Err(ReceiverError::TooManySatellites);
         }
-        let mut channel = Channel::<3>::new(result.prn, &self.config.channel)?;
+        let mut channel =
+            Channel::<3, C>::with_settings(result.prn, &self.config.channel, &self.settings)?;
         channel.start(result)?;
         let status = ChannelStatus {
             prn: result.prn,
@@ -315,10 +347,7 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     /// [`ReceiverError::Tracking`] for a block that does not continue the stream (the
     /// channels are then unusable: release them); [`ReceiverError::NonFinite`] /
     /// [`ReceiverError::InvalidInput`] for an epoch the adapter or the receiver refuses.
-    pub fn push_samples(
-        &mut self,
-        block: &SampleBlock<'_, 3>,
-    ) -> Result<SampleReport, ReceiverError> {
+    pub fn push_samples(&mut self, block: &C::Block<'_>) -> Result<SampleReport, ReceiverError> {
         let mut report = SampleReport::default();
         let slice = self.config.samples_per_epoch.max(1) as usize;
         // each channel's position in `block`
@@ -327,7 +356,11 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
         while end < block.len() {
             end = end.saturating_add(slice).min(block.len());
             // the block up to this slice's end, shared by every channel
-            let sub = sub_block(block, end)?;
+            let sub = block.head(end).ok_or(ReceiverError::Tracking(
+                crate::tracking::TrackingError::Signal(
+                    crate::signal::SignalError::CursorOutOfRange,
+                ),
+            ))?;
             for ((channel, status), cursor) in self.channels.iter_mut().zip(cursors.iter_mut()) {
                 // each call stops at a code period's end: at most a few per slice
                 for _ in 0..4 {
@@ -401,32 +434,6 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
     }
 }
 
-/// `block` cut at `end` samples (the channels' cursors index the same samples).
-fn sub_block<'a>(
-    block: &SampleBlock<'a, 3>,
-    end: usize,
-) -> Result<SampleBlock<'a, 3>, ReceiverError> {
-    let cut = |a: usize, f: fn(&SampleBlock<'a, 3>, usize) -> Option<&'a [i8]>| {
-        f(block, a).and_then(|s| s.get(..end)).unwrap_or(&[])
-    };
-    let i = [
-        cut(0, SampleBlock::i),
-        cut(1, SampleBlock::i),
-        cut(2, SampleBlock::i),
-    ];
-    let made = if block.is_complex() {
-        let q = [
-            cut(0, SampleBlock::q),
-            cut(1, SampleBlock::q),
-            cut(2, SampleBlock::q),
-        ];
-        SampleBlock::complex(block.first_sample(), i, q)
-    } else {
-        SampleBlock::real(block.first_sample(), i)
-    };
-    made.map_err(|e| ReceiverError::Tracking(crate::tracking::TrackingError::Signal(e)))
-}
-
 /// Keeps the items for which `keep` holds, in order (as `heapless::Vec::retain`, whose
 /// counters keep overflow checks the optimizer cannot discharge): a stable in-place
 /// compaction by swaps, then the rest dropped.
@@ -450,6 +457,7 @@ fn retain<T, const N: usize>(items: &mut Vec<T, N>, mut keep: impl FnMut(&T) -> 
 mod tests {
     use super::*;
     use crate::receiver::example::ExampleFlight;
+    use crate::signal::SampleBlock;
     use crate::tracking::AcquisitionError;
 
     type Front = SampleReceiver<2, 1024>;

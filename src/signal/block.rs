@@ -82,6 +82,20 @@ impl<'a, const A: usize> SampleBlock<'a, A> {
         self.q.and_then(|q| q.get(a).copied())
     }
 
+    /// The block's first `n` samples, stamped as this one (`None` for `n > len`).
+    pub fn head(&self, n: usize) -> Option<Self> {
+        if n > self.len {
+            return None;
+        }
+        let cut = |s: &'a [i8]| s.get(..n).unwrap_or_default();
+        Some(Self {
+            first_sample: self.first_sample,
+            i: self.i.map(cut),
+            q: self.q.map(|q| q.map(cut)),
+            len: n,
+        })
+    }
+
     /// The sub-block `[start, start + n)` of antenna `a`: `(i, q)`.
     pub(crate) fn span(
         &self,

@@ -12,10 +12,13 @@
 //!
 //! For 1- and 2-bit front ends, [`bitwise`] correlates the samples as bit planes (32 per word,
 //! XOR and population counts) with the same interface and output ([`bitwise::BitCorrelator`]).
+//! Both implement [`Correlate`] ([`correlate`]): tracking and the receiver are generic over it,
+//! with the `i8` correlator as the default.
 
 pub mod bitwise;
 pub mod block;
 pub mod ca_code;
+pub mod correlate;
 pub mod correlator;
 mod kernels;
 pub mod nco;
@@ -24,6 +27,7 @@ pub mod selftest;
 
 pub use block::SampleBlock;
 pub use ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};
+pub use correlate::{BitSettings, Correlate, CorrelationBlock};
 pub use correlator::{
     Correlator, CorrelatorConfig, EpochCorrelations, Iq, SignalError, SlaveTaps, Taps,
 };

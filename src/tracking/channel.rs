@@ -46,10 +46,11 @@ pub use super::refine::{
 };
 use super::xcorr::{cross_correlation_source, CrossCorrelationTest, SignalProbe};
 use crate::error::{Error, ErrorKind};
+use crate::signal::bitwise::BitCorrelatorError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::correlator::{Correlator, EpochCorrelations, Iq, Taps};
-use crate::signal::SampleBlock;
 use crate::signal::SignalError;
+use crate::signal::{Correlate, CorrelationBlock};
 
 /// Where a channel is in its life.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -145,12 +146,15 @@ const TRACKING_DOPPLER_TOLERANCE_HZ: f32 = 25.0;
 /// within a fraction of a chip of the correlation's peak), chips.
 const TRACKING_LAG_TOLERANCE_CHIPS: f64 = 0.25;
 
-/// One satellite's channel.
+/// One satellite's channel, on the correlator `C` ([`Correlate`]: the `i8` [`Correlator`] by
+/// default, or the bit-parallel
+/// [`BitCorrelator`](crate::signal::bitwise::BitCorrelator) for 1- and 2-bit samples; the
+/// loops, windows and lock detectors are the same for both).
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Channel<const A: usize> {
+pub struct Channel<const A: usize, C = Correlator<A>> {
     config: ChannelConfig,
-    correlator: Correlator<A>,
+    correlator: C,
     carrier: CarrierLoop,
     state: ChannelState,
     pending: Option<SearchResult>,
@@ -183,14 +187,32 @@ struct Discriminators {
 }
 
 impl<const A: usize> Channel<A> {
-    /// An idle channel for `prn`.
+    /// An idle channel for `prn` on the `i8` correlator.
     ///
     /// # Errors
     /// [`TrackingError::InvalidConfig`] / [`TrackingError::NonFinite`] for bad loop
     /// parameters, [`TrackingError::Signal`] for a bad front-end configuration.
     pub fn new(prn: Prn, config: &ChannelConfig) -> Result<Self, TrackingError> {
+        Self::with_settings(prn, config, &())
+    }
+}
+
+impl<const A: usize, C: Correlate<A>> Channel<A, C> {
+    /// An idle channel for `prn` on the correlator `C` with its front-end `settings` (`()`
+    /// for the `i8` correlator, a [`BitSettings`](crate::signal::BitSettings) for the
+    /// bit-parallel one).
+    ///
+    /// # Errors
+    /// [`TrackingError::InvalidConfig`] / [`TrackingError::NonFinite`] for bad loop
+    /// parameters; the correlator's error ([`TrackingError::Signal`],
+    /// [`TrackingError::Bitwise`]) for a front-end configuration it refuses.
+    pub fn with_settings(
+        prn: Prn,
+        config: &ChannelConfig,
+        settings: &C::Settings,
+    ) -> Result<Self, TrackingError> {
         config.validate()?;
-        let correlator = Correlator::new(prn, &config.correlator())?;
+        let correlator = C::new(prn, &config.correlator(), settings).map_err(Into::into)?;
         Ok(Self {
             config: *config,
             correlator,
@@ -224,7 +246,7 @@ impl<const A: usize> Channel<A> {
     }
 
     /// The correlator (NCO state).
-    pub fn correlator(&self) -> &Correlator<A> {
+    pub fn correlator(&self) -> &C {
         &self.correlator
     }
 
@@ -268,10 +290,12 @@ impl<const A: usize> Channel<A> {
     ///
     /// # Errors
     /// [`TrackingError::NotStarted`] before [`Channel::start`]; [`TrackingError::Signal`] for a
-    /// cursor beyond the block (the channel is then unchanged).
+    /// cursor beyond the block (the channel is then unchanged); the correlator's error for a
+    /// block it cannot read (bit planes of another format or code table:
+    /// [`TrackingError::Bitwise`]).
     pub fn process(
         &mut self,
-        block: &SampleBlock<'_, A>,
+        block: &C::Block<'_>,
         cursor: &mut usize,
     ) -> Result<Option<TrackingEpoch<A>>, TrackingError> {
         if self.state == ChannelState::Idle {
@@ -290,7 +314,7 @@ impl<const A: usize> Channel<A> {
         self.complex = block.is_complex();
         let run = self.correlator.run(block, cursor);
         self.next_sample = block.first_sample().wrapping_add(*cursor as u64);
-        let Some(c) = run? else {
+        let Some(c) = run.map_err(Into::into)? else {
             return Ok(None);
         };
         if !c.complete {
@@ -306,9 +330,13 @@ impl<const A: usize> Channel<A> {
         let rate = CA_CHIP_RATE_HZ * (1.0 + doppler / GPS_L1_HZ);
         // On a copy: a refused setting leaves the channel unchanged.
         let mut correlator = self.correlator.clone();
-        correlator.set_code_phase(f64::from(acq.code_phase_chips) + dt * rate)?;
-        correlator.set_code_rate(rate)?;
-        correlator.set_carrier_frequency(self.config.intermediate_frequency_hz + doppler)?;
+        correlator
+            .set_code_phase(f64::from(acq.code_phase_chips) + dt * rate)
+            .and_then(|()| correlator.set_code_rate(rate))
+            .and_then(|()| {
+                correlator.set_carrier_frequency(self.config.intermediate_frequency_hz + doppler)
+            })
+            .map_err(Into::into)?;
         self.correlator = correlator;
         info!(
             "channel: PRN {=u8} handed over at {=f32} Hz",
@@ -427,8 +455,11 @@ impl<const A: usize> Channel<A> {
     /// detector (and the C/N0 until the first long window).
     fn update_windows(&mut self, reference: &Taps, samples: u32, t: f32) {
         let cfg = self.config;
-        self.lock_window.add_taps(reference, samples, self.complex);
-        self.cn0_window.add_taps(reference, samples, self.complex);
+        let floor = self.correlator.rounding_noise_per_sample(self.complex);
+        self.lock_window
+            .add_taps_with_floor(reference, samples, floor);
+        self.cn0_window
+            .add_taps_with_floor(reference, samples, floor);
         if self.lock_window.count() >= u32::from(cfg.lock_window) {
             if let Some(e) = self.lock_window.finish(t) {
                 self.lock.update(&e);
@@ -598,6 +629,10 @@ pub enum TrackingError {
     /// The correlator refused a configuration, NCO setting or block.
     #[error("correlator refused")]
     Signal(#[from] SignalError),
+    /// The bit-parallel correlator refused a configuration, NCO setting or block (planes of
+    /// another format, a code table of another sample rate).
+    #[error("bit-parallel correlator refused")]
+    Bitwise(#[from] BitCorrelatorError),
     /// A hand-over's Doppler is beyond [`MAX_HANDOVER_DOPPLER_HZ`] (no GNSS signal seen from
     /// a satellite in orbit has it; the NCOs could not be set).
     #[error("hand-over Doppler out of range")]
@@ -612,6 +647,7 @@ impl Error for TrackingError {
                 ErrorKind::InvalidInput
             }
             Self::Signal(e) => e.kind(),
+            Self::Bitwise(e) => e.kind(),
         }
     }
 }

@@ -93,15 +93,23 @@ impl PowerWindow {
     /// Adds one epoch of the reference antenna's taps over `samples` samples (`complex`:
     /// I/Q samples), with the samples' quantization floor and the correlation shape.
     pub fn add_taps(&mut self, taps: &Taps, samples: u32, complex: bool) {
+        let components = if complex { 2.0 } else { 1.0 };
+        let amplitude = f32::from(CARRIER_AMPLITUDE);
+        let floor = amplitude * amplitude * components * ROUNDING_NOISE_LSB2;
+        self.add_taps_with_floor(taps, samples, floor);
+    }
+
+    /// Adds one epoch of taps as [`add_taps`](Self::add_taps), with the rounding floor of the
+    /// correlator that made them: `floor_per_sample` is the noise tap's power per sample that
+    /// the samples' rounding alone leaves
+    /// ([`Correlate::rounding_noise_per_sample`](crate::signal::Correlate::rounding_noise_per_sample)).
+    pub fn add_taps_with_floor(&mut self, taps: &Taps, samples: u32, floor_per_sample: f32) {
         let (i, q) = (taps.prompt.i as f32, taps.prompt.q as f32);
         self.sum_i2 += i * i * POWER_SCALE;
         self.sum_q2 += q * q * POWER_SCALE;
         self.sum_n2 += taps.noise.power() * POWER_SCALE;
         self.sum_el2 += 0.5 * (taps.early.power() + taps.late.power()) * POWER_SCALE;
-        let components = if complex { 2.0 } else { 1.0 };
-        let amplitude = f32::from(CARRIER_AMPLITUDE);
-        self.sum_floor +=
-            amplitude * amplitude * samples as f32 * components * ROUNDING_NOISE_LSB2 * POWER_SCALE;
+        self.sum_floor += floor_per_sample * samples as f32 * POWER_SCALE;
         // (epochs in the window: saturates rather than wraps)
         self.count = self.count.saturating_add(1);
     }

@@ -7,7 +7,8 @@
 //! * [`cn0`]: C/N0 and phase-lock indicator from the prompt and noise taps.
 //! * [`lock`]: lock detectors with hysteresis, bit synchronization.
 //! * [`channel`]: the per-satellite channel (hand-over → pull-in → tracking), one
-//!   [`TrackingEpoch`] per code period.
+//!   [`TrackingEpoch`] per code period, on either correlator
+//!   ([`Correlate`](crate::signal::Correlate): `i8` samples or 1- and 2-bit planes).
 //! * [`fft`]: the fixed-size f32 FFT acquisition uses.
 //! * [`xcorr`]: the C/A codes' cross-correlation and the test of whether a detection or a
 //!   channel is another satellite's cross-correlation.

@@ -409,7 +409,7 @@ fn front_end_line(o: &Outcome, q: Quantizer) -> String {
     );
     if let Some(loss) = num("cn0_loss_db") {
         line.push_str(&format!(
-            "; loss against CS8 on the same signals: tracking {loss:.2} dB; open loop: samples {:.2} dB, bit-parallel carrier 2-level {:.2} dB, 3-level {:.2} dB",
+            "; loss against CS8 on the same signals: tracking (bit-parallel, 3-level carrier) {loss:.2} dB; open loop: samples {:.2} dB, bit-parallel carrier 2-level {:.2} dB, 3-level {:.2} dB",
             num("open_loop_sample_loss_db").unwrap_or(f64::NAN),
             num("open_loop_carrier_loss_db_2level").unwrap_or(f64::NAN),
             num("open_loop_carrier_loss_db_3level").unwrap_or(f64::NAN),

@@ -9,12 +9,16 @@
 //! * 1-bit: sign (1.96 dB loss).
 //!
 //! [`Quantizer`] is the front end of the sample-level scenarios (`host-sim run --front-end`):
-//! the CS8 layout above, or the 2-bit / 1-bit quantizers handed to the receiver as the `i8`
-//! values its correlator takes ([`Quantizer::quantize`]).
+//! the CS8 layout above, or the 2-bit / 1-bit quantizers as `i8` values
+//! ([`Quantizer::quantize`]): the search takes them as they are, and the `signal` and
+//! `one-stage` channels ([`crate::chain`]) pack them into bit planes for the core's
+//! bit-parallel correlator ([`Quantizer::bit_settings`]); the `microsat` sample-level stretch
+//! still hands them to the `i8` correlator.
 
 use anyhow::{bail, Result};
+use gnss_attitude::signal::bitwise::{CarrierLevels, PlaneFormat, Resolution};
 use gnss_attitude::signal::samples::sign_magnitude;
-use gnss_attitude::signal::SampleFormat;
+use gnss_attitude::signal::{BitSettings, SampleFormat};
 
 use super::scene::AnalogSamples;
 
@@ -37,6 +41,9 @@ fn two_bit(x: f32) -> u8 {
     (sign << 1) | mag
 }
 
+/// The C/N0 loss of the bit-parallel correlator's 3-level carrier replica in theory, dB.
+pub const CARRIER_3LEVEL_LOSS_DB: f64 = 0.35;
+
 /// Level of a 2-bit sample handed to the `i8` correlator, LSB per unit level (`±1, ±3` become
 /// `±8, ±24`: RMS 15.0 LSB at the 1σ threshold, next to CS8's 16 LSB per σ).
 pub const SM2_LSB_PER_LEVEL: i8 = 8;
@@ -52,9 +59,9 @@ pub enum Quantizer {
     #[default]
     I8,
     /// Complex 2-bit sign/magnitude (levels `±1, ±3`, threshold [`TWO_BIT_THRESHOLD`] σ), as a
-    /// MAX2769 / NT1065 delivers; handed to the correlator as `±8, ±24`.
+    /// MAX2769 / NT1065 delivers; as `i8` values `±8, ±24`.
     Sm2,
-    /// Complex 1-bit (sign, `±1`); handed to the correlator as `±16`.
+    /// Complex 1-bit (sign, `±1`); as `i8` values `±16`.
     Bit1,
 }
 
@@ -80,6 +87,16 @@ impl Quantizer {
             Self::I8 => 0.0,
             Self::Sm2 => 0.55,
             Self::Bit1 => 10.0 * std::f64::consts::FRAC_PI_2.log10(),
+        }
+    }
+
+    /// The C/N0 loss of the bit-parallel path ([`Quantizer::bit_settings`]) in theory, dB:
+    /// the samples' ([`Quantizer::theory_loss_db`]) plus the 3-level carrier's 0.35 dB (0 for
+    /// `i8`). The `signal` and `one-stage` scenarios' channels run this path.
+    pub fn bit_path_theory_loss_db(self) -> f64 {
+        match self {
+            Self::I8 => 0.0,
+            _ => self.theory_loss_db() + CARRIER_3LEVEL_LOSS_DB,
         }
     }
 
@@ -135,6 +152,34 @@ impl Quantizer {
             q: analog.iter().map(|a| map(&a.q)).collect(),
         })
     }
+}
+
+impl Quantizer {
+    /// The bit-parallel correlator's settings the sample-level chain ([`crate::chain`]) runs
+    /// for this front end's samples (`None` for [`Quantizer::I8`], which runs the `i8`
+    /// correlator): 2- or 1-bit planes and the 3-level carrier (0.35 dB of carrier
+    /// quantization against 0.91 dB for the 2-level one, which keeps both front ends within
+    /// issue 18's loss targets; the M4F's cheaper 2-level kernel is the firmware's choice).
+    pub fn bit_settings(self, complex: bool) -> Option<BitSettings> {
+        let resolution = match self {
+            Self::I8 => return None,
+            Self::Sm2 => Resolution::TwoBit,
+            Self::Bit1 => Resolution::OneBit,
+        };
+        let carrier = CarrierLevels::Three;
+        Some(BitSettings {
+            format: PlaneFormat {
+                resolution,
+                complex,
+            },
+            carrier,
+        })
+    }
+
+    /// The magnitude threshold that packs this quantizer's `i8` values
+    /// ([`Quantizer::level`]) into bit planes exactly (`PlaneBuffer::pack_i8`): between the
+    /// 2-bit levels `±8` and `±24`.
+    pub const PLANE_THRESHOLD: u8 = 2 * SM2_LSB_PER_LEVEL as u8;
 }
 
 impl std::fmt::Display for Quantizer {

@@ -69,6 +69,20 @@ impl<'a, const A: usize> BitBlock<'a, A> {
         self.planes.get(a)
     }
 
+    /// The block's first `n` samples, stamped as this one (`None` for `n > len`).
+    pub fn head(&self, n: usize) -> Option<Self> {
+        if n > self.len {
+            return None;
+        }
+        Some(Self {
+            first_sample: self.first_sample,
+            len: n,
+            format: self.format,
+            planes: self.planes.map(|p| p.head(n)),
+            table: self.table,
+        })
+    }
+
     /// The code table.
     pub fn table(&self) -> &'a CodeTable {
         self.table

@@ -42,7 +42,7 @@ const LATE: usize = 2;
 const NOISE: usize = 3;
 
 /// Error returned by [`BitCorrelator`] and [`CodeTable::new`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, thiserror::Error)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum BitCorrelatorError {

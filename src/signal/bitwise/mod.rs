@@ -25,6 +25,13 @@
 //! computes the same sums one sample at a time, and the property tests
 //! (`tests/bitwise_props.rs`) check that the two agree bit for bit.
 //!
+//! Both implement [`Correlate`](super::Correlate): a tracking
+//! [`Channel`](crate::tracking::Channel) or a
+//! [`SampleReceiver`](crate::receiver::SampleReceiver) runs on either (`with_settings` and a
+//! [`BitSettings`](super::BitSettings)), reading [`BitBlock`]s instead of
+//! [`SampleBlock`](super::SampleBlock)s; the acquisition search takes `i8` samples, which
+//! [`AntennaPlanes::unpack_i8`] gives from the planes.
+//!
 //! # Word layout
 //! Sample `32·w + k` of a block is bit `k` of word `w` ([`planes`]). Per antenna there is a
 //! sign plane of I (bit set: negative), for 2-bit samples a magnitude plane (bit set: `|x| = 3`,

@@ -183,6 +183,46 @@ impl<'a> AntennaPlanes<'a> {
         self.words[MAG_Q]
     }
 
+    /// The planes' first `n` samples (all of them for `n ≥ len`).
+    pub fn head(&self, n: usize) -> Self {
+        let len = n.min(self.len);
+        let words = len.div_ceil(WORD_SAMPLES);
+        Self {
+            words: self.words.map(|w| w.get(..words).unwrap_or(w)),
+            len,
+            format: self.format,
+        }
+    }
+
+    /// Unpacks the planes into `i8` samples (`±1`, `±3`, the values
+    /// [`SampleFormat::decode`] gives): in-phase into `i`, quadrature into `q` (complex planes
+    /// only; `q` is not touched for real ones), from sample `from` on. Returns the samples
+    /// written: `min(len − from, i.len())`, and for complex planes at most `q.len()`.
+    ///
+    /// For the acquisition search, which runs on `i8` samples: a few milliseconds of the
+    /// reference antenna, about 2 operations per sample and component.
+    pub fn unpack_i8(&self, from: usize, i: &mut [i8], q: &mut [i8]) -> usize {
+        let mut n = self.len.saturating_sub(from).min(i.len());
+        if self.format.complex {
+            n = n.min(q.len());
+        }
+        let two = self.format.two_bit();
+        let len = self.len;
+        let unpack = |signs: &[u32], mags: &[u32], out: &mut [i8]| {
+            for (k, x) in (from..len).zip(out.iter_mut().take(n)) {
+                let (w, b) = (k / WORD_SAMPLES, (k % WORD_SAMPLES) as u32);
+                let bit = |p: &[u32]| (p.get(w).copied().unwrap_or(0) >> b) & 1;
+                let mag = if two { 1 + 2 * bit(mags) as i8 } else { 1 };
+                *x = if bit(signs) == 1 { -mag } else { mag };
+            }
+        };
+        unpack(self.sign_i(), self.mag_i(), i);
+        if self.format.complex {
+            unpack(self.sign_q(), self.mag_q(), q);
+        }
+        n
+    }
+
     /// The value (`±1`, `±3`) of sample `k` of component `q` (false: I, true: Q); 0 beyond the
     /// planes. For tests and the scalar reference, not for the hot path.
     pub fn value(&self, k: usize, quadrature: bool) -> i8 {
@@ -676,6 +716,41 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn unpacking_gives_the_values_and_heads_keep_the_first_samples() {
+        let bytes = pseudo_bytes(200, 5);
+        for res in [Resolution::OneBit, Resolution::TwoBit] {
+            let fmt = SampleFormat::SignMagnitude2 { complex: true };
+            let pf = PlaneFormat {
+                resolution: res,
+                complex: true,
+            };
+            let mut buf = PlaneBuffer::<16>::new(pf);
+            let n = buf.pack_bytes(fmt, &bytes[..200], 0).unwrap();
+            assert_eq!(n, 400);
+            let planes = buf.planes();
+            for from in [0usize, 1, 31, 32, 77] {
+                let (mut i, mut q) = ([0i8; 512], [0i8; 100]);
+                // q shorter than the rest: it bounds the samples written
+                let got = planes.unpack_i8(from, &mut i, &mut q);
+                assert_eq!(got, 100);
+                for k in 0..got {
+                    assert_eq!(i[k], planes.value(from + k, false), "{res:?} {from} {k}");
+                    assert_eq!(q[k], planes.value(from + k, true), "{res:?} {from} {k}");
+                }
+                assert!(i[got..].iter().all(|&x| x == 0));
+            }
+            let head = planes.head(45);
+            assert_eq!(head.len(), 45);
+            assert_eq!(head.sign_i().len(), 2);
+            for k in 0..45 {
+                assert_eq!(head.value(k, true), planes.value(k, true));
+            }
+            assert_eq!(head.value(45, false), 0);
+            assert_eq!(planes.head(1000).len(), 400);
         }
     }
 
