@@ -88,6 +88,27 @@ impl NavChannel {
         }
     }
 
+    /// The satellite.
+    pub fn prn(&self) -> u8 {
+        self.decoder.prn()
+    }
+
+    /// Whether the decoder holds subframe sync (it knows the time of transmission).
+    pub fn subframe_synchronized(&self) -> bool {
+        self.decoder.subframe_synchronized()
+    }
+
+    /// The subframes decoded and the ones refused (parity, preamble) since the last call, for
+    /// a caller with a store of its own (the microsat flight's navigation); the fix
+    /// instants' measurements are dropped.
+    pub fn take_decoded(&mut self) -> (Vec<Subframe>, Vec<SubframeError>) {
+        self.measurements.clear();
+        (
+            std::mem::take(&mut self.subframes),
+            std::mem::take(&mut self.refused),
+        )
+    }
+
     /// Takes one tracking epoch (`locked`: code and phase lock).
     pub fn epoch<const A: usize>(&mut self, e: &TrackingEpoch<A>, locked: bool) {
         // a new hand-over restarts the epoch count: the decoder starts over
