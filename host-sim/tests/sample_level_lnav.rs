@@ -22,7 +22,10 @@ fn the_sample_level_stretch_decodes_the_subframes_the_encoder_wrote() {
     };
     let record = fly(&config, None).unwrap();
     let nav = &record.navigation;
-    let stats = record.sample_stats.as_ref().expect("a sample-level stretch");
+    let stats = record
+        .sample_stats
+        .as_ref()
+        .expect("a sample-level stretch");
 
     // every satellite found locks within ~2 s, synchronizes on its bits within ~1 s and on
     // a preamble confirmed by the next one within two subframes (≤ 12 s): by 25 s each has

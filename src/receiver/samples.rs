@@ -29,8 +29,8 @@ use crate::signal::{Prn, SampleBlock};
 use crate::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
-    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal, SearchResult,
-    TrackingEpoch,
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal,
+    SearchResult, TrackingEpoch,
 };
 
 /// What a [`SampleReceiver`] needs besides the [`ReceiverConfig`].
@@ -567,11 +567,8 @@ mod tests {
         assert!(epochs >= 30, "epochs {epochs}");
         assert_eq!(seen.len(), epochs as usize);
         for prn in [5u8, 9] {
-            let indices: heapless::Vec<u32, 64> = seen
-                .iter()
-                .filter(|s| s.0 == prn)
-                .map(|s| s.1)
-                .collect();
+            let indices: heapless::Vec<u32, 64> =
+                seen.iter().filter(|s| s.0 == prn).map(|s| s.1).collect();
             assert!(indices.len() >= 15, "PRN {prn}: {indices:?}");
             assert!(indices.windows(2).all(|w| w[1] == w[0] + 1), "{indices:?}");
         }

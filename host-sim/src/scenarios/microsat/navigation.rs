@@ -37,8 +37,8 @@
 use std::collections::BTreeMap;
 
 use gnss_attitude::nav::bits::DataBit;
-use gnss_attitude::nav::Subframe;
 use gnss_attitude::nav::filter::OrbitFilterError;
+use gnss_attitude::nav::Subframe;
 use gnss_attitude::nav::{
     line_of_sight, solve, Fix, GpsTime, NavigationStore, Observation, OrbitFilter,
     OrbitFilterConfig, ReferenceFrame, SolverConfig, StoreConfig, SubframeSync,

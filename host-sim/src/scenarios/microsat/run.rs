@@ -487,12 +487,12 @@ impl<'a> Flight<'a> {
             if let Some(sl) = samples {
                 self.navigation.add_decoded(sl.take_decoded());
                 let sl = &*sl;
-                self.navigation
-                    .second(&self.world, e.t0, &tracked, |prn| {
-                        Some(sl.subframe_synchronized(prn).unwrap_or(false))
-                    });
+                self.navigation.second(&self.world, e.t0, &tracked, |prn| {
+                    Some(sl.subframe_synchronized(prn).unwrap_or(false))
+                });
             } else {
-                self.navigation.second(&self.world, e.t0, &tracked, |_| None);
+                self.navigation
+                    .second(&self.world, e.t0, &tracked, |_| None);
             }
         }
         if block_start {

@@ -346,7 +346,9 @@ impl SampleLevel {
 
     /// Whether `prn`'s decoder holds subframe sync (`None`: no channel has tracked it).
     pub fn subframe_synchronized(&self, prn: u8) -> Option<bool> {
-        self.decoders.get(&prn).map(NavChannel::subframe_synchronized)
+        self.decoders
+            .get(&prn)
+            .map(NavChannel::subframe_synchronized)
     }
 
     /// The front-end configuration of the core's receiver for this stretch.
