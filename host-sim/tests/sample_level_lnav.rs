@@ -51,6 +51,19 @@ fn the_sample_level_stretch_decodes_the_subframes_the_encoder_wrote() {
     prns.dedup();
     assert!(prns.len() >= 4, "decoded from {prns:?}");
 
+    // the channels' code phases with their decoded subframes give the time of transmission
+    // (the core's `TransmitTime`): each second of each synchronized channel, c·Δt against the
+    // truth
+    let errors = &nav.sample_level_code_errors_m;
+    let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len().max(1) as f64).sqrt();
+    let worst = errors.iter().copied().map(f64::abs).fold(0.0, f64::max);
+    eprintln!(
+        "code-phase times of transmission: {} of them, RMS {rms:.2} m, worst {worst:.2} m",
+        errors.len()
+    );
+    assert!(errors.len() >= 2 * prns.len(), "{} errors", errors.len());
+    assert!(rms < 5.0 && worst < 20.0, "RMS {rms} m, worst {worst} m");
+
     // what was decoded is what the encoder wrote for that satellite and subframe time:
     // random data bits, a wrong signal time or a slipped bit would fail the comparison
     let encoder = LnavEncoder::bundled();

@@ -99,14 +99,29 @@ impl NavChannel {
     }
 
     /// The subframes decoded and the ones refused (parity, preamble) since the last call, for
-    /// a caller with a store of its own (the microsat flight's navigation); the fix
-    /// instants' measurements are dropped.
+    /// a caller with a store of its own (the microsat flight's navigation).
     pub fn take_decoded(&mut self) -> (Vec<Subframe>, Vec<SubframeError>) {
-        self.measurements.clear();
         (
             std::mem::take(&mut self.subframes),
             std::mem::take(&mut self.refused),
         )
+    }
+
+    /// Gives the decoder the GPS week (a subframe 1's, or the flight computer's), so that its
+    /// subframe anchor yields times of transmission.
+    pub fn set_week(&mut self, week: u16) {
+        if self.decoder.anchor().is_some_and(|a| a.week.is_none()) {
+            self.decoder.set_week(week);
+        }
+    }
+
+    /// The times of transmission measured at the fix instants since the last call: receiver
+    /// sample of the instant (a multiple of `FIX_INTERVAL_S · fs`) and the time.
+    pub fn take_transmit_times(&mut self) -> Vec<(u64, TransmitTime)> {
+        self.measurements
+            .drain(..)
+            .map(|m| (m.instant, m.transmit))
+            .collect()
     }
 
     /// Takes one tracking epoch (`locked`: code and phase lock).

@@ -332,6 +332,10 @@ crate::metrics! {
         /// Of the stretch's subframes, those refused by their parity (part of
         /// `nav_parity_failures`).
         #[metric(unit = "")] pub sample_level_parity_failures: u32,
+        /// RMS error of the stretch's code-phase pseudoranges: each channel's time of
+        /// transmission from its decoded subframes and code phase, less the truth's, times c
+        /// (at whole seconds; not used by the fixes).
+        #[metric(unit = "m")] pub sample_level_code_range_rms_m: Option<f64>,
     }
 }
 
@@ -533,6 +537,7 @@ fn navigation_metrics(n: &NavigationRecord) -> NavigationMetrics {
         nav_parity_failures: n.parity_failures,
         sample_level_subframes: n.sample_level_subframes,
         sample_level_parity_failures: n.sample_level_parity_failures,
+        sample_level_code_range_rms_m: rms(&mut n.sample_level_code_errors_m.iter().copied()),
     }
 }
 

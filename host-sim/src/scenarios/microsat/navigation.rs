@@ -38,11 +38,11 @@ use std::collections::BTreeMap;
 
 use gnss_attitude::nav::bits::DataBit;
 use gnss_attitude::nav::filter::OrbitFilterError;
-use gnss_attitude::nav::Subframe;
 use gnss_attitude::nav::{
     line_of_sight, solve, Fix, GpsTime, NavigationStore, Observation, OrbitFilter,
     OrbitFilterConfig, ReferenceFrame, SolverConfig, StoreConfig, SubframeSync,
 };
+use gnss_attitude::nav::{Subframe, TransmitTime};
 use gnss_attitude::receiver::SatelliteAiding;
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -152,6 +152,10 @@ pub struct NavigationRecord {
     pub sample_level_parity_failures: u32,
     /// The stretch's decoded subframes, by PRN, in decoding order.
     pub sample_level_decoded: Vec<(u8, Subframe)>,
+    /// The stretch's channels' times of transmission from their code phases and decoded
+    /// subframes, less the truth's (`c·Δt`, m; the code-phase pseudorange's error besides the
+    /// receiver clock), at whole seconds.
+    pub sample_level_code_errors_m: Vec<f64>,
 }
 
 /// The receiver's navigation over a flight.
@@ -252,6 +256,26 @@ impl Navigation {
                 self.record.sample_level_parity_failures += 1;
             }
         }
+    }
+
+    /// The GPS week the stretch's decoders count in: a decoded subframe 1's, else the flight
+    /// computer's a-priori (the one it predicts the sky with).
+    pub fn week(&self) -> u16 {
+        self.store.week().unwrap_or(self.start.week)
+    }
+
+    /// Records the error of `prn`'s time of transmission `transmit` measured from its code
+    /// phase at flight time `t` against the truth's signal time.
+    pub fn check_transmit_time(&mut self, world: &World, prn: u8, t: f64, transmit: &TransmitTime) {
+        let (Some(sig), Ok(measured)) = (self.signal(world, prn, t), transmit.gps_time()) else {
+            return;
+        };
+        let weeks = f64::from(measured.week) - f64::from(self.encoder.almanac_week);
+        let measured_s = weeks * WEEK_S + measured.tow_s;
+        let truth_s = sig.transmit_s + sig.clock_s;
+        self.record
+            .sample_level_code_errors_m
+            .push(C * (measured_s - truth_s));
     }
 
     /// The hand-over from the sample-level stretch: the modelled decoders continue only for

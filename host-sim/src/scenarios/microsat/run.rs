@@ -486,6 +486,13 @@ impl<'a> Flight<'a> {
             let samples = self.sample_level.as_mut().filter(|_| e.in_samples);
             if let Some(sl) = samples {
                 self.navigation.add_decoded(sl.take_decoded());
+                let week = self.navigation.week();
+                for &(prn, _) in &tracked {
+                    for (t, transmit) in sl.take_transmit_times(prn, week) {
+                        self.navigation
+                            .check_transmit_time(&self.world, prn, t, &transmit);
+                    }
+                }
                 let sl = &*sl;
                 self.navigation.second(&self.world, e.t0, &tracked, |prn| {
                     Some(sl.subframe_synchronized(prn).unwrap_or(false))

@@ -30,7 +30,7 @@ use std::sync::Arc;
 use anyhow::{anyhow, Result};
 use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::nav::subframe::SubframeError;
-use gnss_attitude::nav::Subframe;
+use gnss_attitude::nav::{Subframe, TransmitTime};
 use gnss_attitude::receiver::{
     AttitudeSource, SampleFrontConfig, SampleReceiver, SampleReport, MAX_SATELLITES,
 };
@@ -341,6 +341,19 @@ impl SampleLevel {
                 (d.prn(), subframes, refused)
             })
             .filter(|(_, s, r)| !s.is_empty() || !r.is_empty())
+            .collect()
+    }
+
+    /// The times of transmission `prn`'s channel measured from its code phase at the whole
+    /// seconds since the last call (flight time s, the time), its decoder given `week` first.
+    pub fn take_transmit_times(&mut self, prn: u8, week: u16) -> Vec<(f64, TransmitTime)> {
+        let Some(d) = self.decoders.get_mut(&prn) else {
+            return Vec::new();
+        };
+        d.set_week(week);
+        d.take_transmit_times()
+            .into_iter()
+            .map(|(sample, t)| (sample as f64 / SAMPLE_RATE_HZ, t))
             .collect()
     }
 
