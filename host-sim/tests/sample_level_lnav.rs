@@ -1,8 +1,10 @@
 //! The main job's sample-level stretch carries the LNAV message and its receiver decodes it:
 //! the synthesized samples carry the encoder's bits at the signal time each left the
 //! satellite, the core's bit synchronizer and subframe synchronizer run on the tracking
-//! channels' 1 ms prompts, and what they decode goes to the flight's navigation store. Heavy
-//! (25 s from samples, about 40 s in release): run it with `--ignored`.
+//! channels' 1 ms prompts, and what they decode goes to the flight's navigation store; with
+//! the channels' code phases the decoded subframes give the time of transmission (seed 1: 33
+//! seconds×channels, 0.97 m RMS, 2.4 m worst against the truth). Heavy (25 s from samples,
+//! about 20 s in release): run it with `--ignored`.
 
 use host_sim::scenarios::microsat::navigation::Navigation;
 use host_sim::scenarios::microsat::run::{fly, FlightConfig};

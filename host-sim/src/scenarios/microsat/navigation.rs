@@ -22,8 +22,10 @@
 //!   decoder (its subframes dropped) so that a channel the stretch hands over synchronized
 //!   continues synchronized; one whose decoder had no subframe sync starts over. A satellite
 //!   has an ephemeris only when the store assembled subframes 1–3 with agreeing IODE/IODC.
-//! * **Pseudoranges** (the stretch's too: its channels' code phases carry the time of
-//!   transmission, but are not used yet): `ρ = |R_z(−ω⊕τ) r_s(t − τ) − r(t)| + b(t) − c Δt_sv + ε`: the truth's
+//! * **Pseudoranges** (the stretch's too: its channels' code phases with their decoded
+//!   subframes give the time of transmission, checked against the truth
+//!   ([`Navigation::check_transmit_time`], metric `sample_level_code_range_rms_m`) but not
+//!   used by the fixes yet): `ρ = |R_z(−ω⊕τ) r_s(t − τ) − r(t)| + b(t) − c Δt_sv + ε`: the truth's
 //!   satellite (almanac orbit, ECEF) at its time of transmission with the Sagnac rotation,
 //!   the truth's orbit, a receiver clock `b(t) = b0 + ḃ t` (TCXO: bias anywhere in ±1 ms,
 //!   drift of some 10⁻⁸), the satellite clock the encoder's signal carries, and ε with the
