@@ -38,7 +38,8 @@ use crate::signal::{Correlate, CorrelationBlock, Correlator, Prn};
 use crate::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
-    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal, SearchResult,
+    Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal,
+    SearchResult, TrackingEpoch,
 };
 
 /// What a [`SampleReceiver`] needs besides the [`ReceiverConfig`].
@@ -347,7 +348,28 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     /// [`ReceiverError::Tracking`] for a block that does not continue the stream (the
     /// channels are then unusable: release them); [`ReceiverError::NonFinite`] /
     /// [`ReceiverError::InvalidInput`] for an epoch the adapter or the receiver refuses.
-    pub fn push_samples(&mut self, block: &C::Block<'_>) -> Result<SampleReport, ReceiverError> {
+    pub fn push_samples(
+        &mut self,
+        block: &C::Block<'_>,
+    ) -> Result<SampleReport, ReceiverError> {
+        self.push_samples_observed(block, &mut |_, _, _| {})
+    }
+
+    /// [`Self::push_samples`] that also shows every channel's tracking epoch to `observer`
+    /// as it closes (one call per channel and 1 ms code period, in the order the receiver
+    /// gets them): the satellite, the epoch (prompt, code phase, Doppler, C/N0, receiver
+    /// samples), and whether it had code and phase lock while tracking
+    /// ([`ChannelStatus::locked`]). For the navigation message's bit and subframe
+    /// synchronization on the prompts ([`crate::nav::ChannelDecoder`]) and pseudoranges from
+    /// the code phases. Same bounds and errors as [`Self::push_samples`].
+    ///
+    /// # Errors
+    /// As [`Self::push_samples`].
+    pub fn push_samples_observed(
+        &mut self,
+        block: &C::Block<'_>,
+        observer: &mut impl FnMut(Prn, &TrackingEpoch<3>, bool),
+    ) -> Result<SampleReport, ReceiverError> {
         let mut report = SampleReport::default();
         let slice = self.config.samples_per_epoch.max(1) as usize;
         // each channel's position in `block`
@@ -379,6 +401,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
                     if status.locked {
                         status.last_lock_sample = epoch.correlations.first_sample;
                     }
+                    observer(status.prn, &epoch, status.locked);
                     let obs = self
                         .adapter
                         .observe(&epoch, [0.0, 0.0, 1.0])
@@ -527,5 +550,44 @@ mod tests {
         assert_eq!(total.observations, 0);
         assert_eq!(total.released, 1);
         assert_eq!(rx.channels().count(), 0);
+    }
+
+    /// The observer sees every epoch `push_samples` counts, once, in code-period order, with
+    /// the channel's satellite and lock; and observing changes nothing: a twin receiver fed
+    /// the same blocks through `push_samples` reports the same and ends in the same state.
+    #[test]
+    fn the_observer_sees_each_channel_epoch_once_and_changes_nothing() {
+        let mut observed = front();
+        observed.start(&detection(5)).expect("room");
+        observed.start(&detection(9)).expect("room");
+        let mut plain = observed.clone();
+        let zeros = [0i8; 1023];
+        let mut seen: heapless::Vec<(u8, u32, bool), 64> = heapless::Vec::new();
+        let mut epochs = 0u32;
+        for k in 0..20u64 {
+            let block = SampleBlock::complex(k * 1023, [&zeros; 3], [&zeros; 3]).unwrap();
+            let a = observed
+                .push_samples_observed(&block, &mut |prn, e, locked| {
+                    seen.push((prn.number(), e.index, locked)).expect("room");
+                })
+                .expect("a continuing stream");
+            let b = plain.push_samples(&block).expect("a continuing stream");
+            assert_eq!(a, b);
+            epochs += a.epochs;
+        }
+        assert!(epochs >= 30, "epochs {epochs}");
+        assert_eq!(seen.len(), epochs as usize);
+        for prn in [5u8, 9] {
+            let indices: heapless::Vec<u32, 64> =
+                seen.iter().filter(|s| s.0 == prn).map(|s| s.1).collect();
+            assert!(indices.len() >= 15, "PRN {prn}: {indices:?}");
+            assert!(indices.windows(2).all(|w| w[1] == w[0] + 1), "{indices:?}");
+        }
+        // noise alone never locks
+        assert!(seen.iter().all(|s| !s.2));
+        assert_eq!(
+            observed.channels().collect::<heapless::Vec<_, 2>>(),
+            plain.channels().collect::<heapless::Vec<_, 2>>()
+        );
     }
 }

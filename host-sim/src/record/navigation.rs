@@ -88,6 +88,42 @@ impl NavChannel {
         }
     }
 
+    /// The satellite.
+    pub fn prn(&self) -> u8 {
+        self.decoder.prn()
+    }
+
+    /// Whether the decoder holds subframe sync (it knows the time of transmission).
+    pub fn subframe_synchronized(&self) -> bool {
+        self.decoder.subframe_synchronized()
+    }
+
+    /// The subframes decoded and the ones refused (parity, preamble) since the last call, for
+    /// a caller with a store of its own (the microsat flight's navigation).
+    pub fn take_decoded(&mut self) -> (Vec<Subframe>, Vec<SubframeError>) {
+        (
+            std::mem::take(&mut self.subframes),
+            std::mem::take(&mut self.refused),
+        )
+    }
+
+    /// Gives the decoder the GPS week (a subframe 1's, or the flight computer's), so that its
+    /// subframe anchor yields times of transmission.
+    pub fn set_week(&mut self, week: u16) {
+        if self.decoder.anchor().is_some_and(|a| a.week.is_none()) {
+            self.decoder.set_week(week);
+        }
+    }
+
+    /// The times of transmission measured at the fix instants since the last call: receiver
+    /// sample of the instant (a multiple of `FIX_INTERVAL_S · fs`) and the time.
+    pub fn take_transmit_times(&mut self) -> Vec<(u64, TransmitTime)> {
+        self.measurements
+            .drain(..)
+            .map(|m| (m.instant, m.transmit))
+            .collect()
+    }
+
     /// Takes one tracking epoch (`locked`: code and phase lock).
     pub fn epoch<const A: usize>(&mut self, e: &TrackingEpoch<A>, locked: bool) {
         // a new hand-over restarts the epoch count: the decoder starts over

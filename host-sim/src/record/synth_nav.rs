@@ -98,6 +98,45 @@ pub fn broadcast_klobuchar(encoder: &LnavEncoder) -> KlobucharParameters {
     }
 }
 
+/// The LNAV message on a synthesized satellite's signal: the scene's code count starts at
+/// the subframe start before the signal time received at the first sample, so that code
+/// period `k` carries the LNAV bit `⌊k/20⌋` of that subframe on, and the code phase at any
+/// sample is the signal's time of transmission (`code count = CHIP_RATE·(t_sv − reference)`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LnavModulation {
+    /// The scene satellite's code phase at the first sample (its code count), chips:
+    /// `CHIP_RATE·(t_sv0 − reference)`.
+    pub code_phase_chips: f64,
+    /// The data bits from the subframe start on (a [`SatelliteTrack::data_bits`] table).
+    pub data_bits: Vec<bool>,
+    /// The subframe start before `t_sv0`, s of the week (satellite clock).
+    pub reference_s: f64,
+}
+
+impl LnavModulation {
+    /// The modulation of `prn` (`week`) whose signal received at the first sample left the
+    /// satellite at `t_sv0` (s of `week`, satellite clock: light time and `Δt_sv` included),
+    /// covering `seconds` of samples (and a second more). Bits of a PRN the encoder lacks
+    /// are 0.
+    pub fn new(encoder: &LnavEncoder, prn: u8, week: u16, t_sv0: f64, seconds: f64) -> Self {
+        let reference = (t_sv0 / SUBFRAME_S).floor() * SUBFRAME_S;
+        let bits = ((t_sv0 - reference + seconds.max(0.0) + 1.0) / BIT_S).ceil() as usize;
+        let mut stream = LnavBitStream::default();
+        let data_bits = (0..bits)
+            .map(|b| {
+                stream
+                    .bit(encoder, prn, week, reference + (b as f64 + 0.5) * BIT_S)
+                    .unwrap_or(false)
+            })
+            .collect();
+        Self {
+            code_phase_chips: CHIP_RATE * (t_sv0 - reference),
+            data_bits,
+            reference_s: reference,
+        }
+    }
+}
+
 /// The geometry of one satellite seen by the receiver.
 struct Geometry<'a> {
     encoder: &'a LnavEncoder,
@@ -229,23 +268,10 @@ pub fn lnav_satellites(
             track.cn0_dbhz.push(vec![cn0; antennas_b.len()]);
         }
         let (rho0, los0) = geometry.at(0.0);
-        // the signal time received at the first sample, and the subframe start before it
+        // the signal time received at the first sample
         let t_sv0 = lnav.tow_s - rho0 / SPEED_OF_LIGHT;
-        let reference = (t_sv0 / SUBFRAME_S).floor() * SUBFRAME_S;
-        let bits = ((t_sv0 - reference + seconds + 1.0) / BIT_S).ceil() as usize;
-        let mut stream = LnavBitStream::default();
-        track.data_bits = (0..bits)
-            .map(|b| {
-                stream
-                    .bit(
-                        &encoder,
-                        view.prn,
-                        lnav.week,
-                        reference + (b as f64 + 0.5) * BIT_S,
-                    )
-                    .unwrap_or(false)
-            })
-            .collect();
+        let modulation = LnavModulation::new(&encoder, view.prn, lnav.week, t_sv0, seconds);
+        track.data_bits = modulation.data_bits;
         let rate0 = track.range_rate_m_s.first().copied().unwrap_or(0.0);
         let rate1 = track.range_rate_m_s.get(1).copied().unwrap_or(rate0);
         let frame_start = lnav.tow_s - lnav.tow_s.rem_euclid(30.0);
@@ -258,7 +284,7 @@ pub fn lnav_satellites(
                 cn0_dbhz: cn0,
                 doppler_hz: -rate0 / L1_WAVELENGTH,
                 doppler_rate_hz_s: -(rate1 - rate0) / TRACK_STEP_S / L1_WAVELENGTH,
-                code_phase_chips: CHIP_RATE * (t_sv0 - reference),
+                code_phase_chips: modulation.code_phase_chips,
                 carrier_phase_cycles: carrier_phase(),
                 los_ref: los0,
                 data_seed: None,

@@ -325,6 +325,17 @@ crate::metrics! {
         #[metric(unit = "")] pub nav_subframes: u32,
         /// Subframes refused by their parity.
         #[metric(unit = "")] pub nav_parity_failures: u32,
+        /// Subframes the sample-level stretch decoded from its channels' prompts (the
+        /// core's bit and subframe synchronization on the samples' LNAV message; part of
+        /// `nav_subframes` when the store took them).
+        #[metric(unit = "")] pub sample_level_subframes: u32,
+        /// Of the stretch's subframes, those refused by their parity (part of
+        /// `nav_parity_failures`).
+        #[metric(unit = "")] pub sample_level_parity_failures: u32,
+        /// RMS error of the stretch's code-phase pseudoranges: each channel's time of
+        /// transmission from its decoded subframes and code phase, less the truth's, times c
+        /// (at whole seconds; not used by the fixes).
+        #[metric(unit = "m")] pub sample_level_code_range_rms_m: Option<f64>,
     }
 }
 
@@ -491,7 +502,7 @@ fn metrics_of(
 fn navigation_line(aiding: AidingSource, n: &NavigationMetrics) -> String {
     let f = |x: Option<f64>, p: usize| x.map_or("none".into(), |v| format!("{v:.p$}"));
     format!(
-        "navigation ({}): first fix {} s, {} fixes, position RMS {} m (filter {} m), PDOP {}, line-of-sight error RMS {} µrad, {} ephemerides from {} subframes",
+        "navigation ({}): first fix {} s, {} fixes, position RMS {} m (filter {} m), PDOP {}, line-of-sight error RMS {} µrad, {} ephemerides from {} subframes ({} decoded from samples, {} parity failures there)",
         match aiding {
             AidingSource::Own => "aids the receiver",
             AidingSource::Truth => "flown beside the truth's aiding",
@@ -504,6 +515,8 @@ fn navigation_line(aiding: AidingSource, n: &NavigationMetrics) -> String {
         f(n.los_error_rms_urad, 3),
         n.ephemerides_decoded,
         n.nav_subframes,
+        n.sample_level_subframes,
+        n.sample_level_parity_failures,
     )
 }
 
@@ -522,6 +535,9 @@ fn navigation_metrics(n: &NavigationRecord) -> NavigationMetrics {
         ephemerides_decoded: n.ephemerides,
         nav_subframes: n.subframes,
         nav_parity_failures: n.parity_failures,
+        sample_level_subframes: n.sample_level_subframes,
+        sample_level_parity_failures: n.sample_level_parity_failures,
+        sample_level_code_range_rms_m: rms(&mut n.sample_level_code_errors_m.iter().copied()),
     }
 }
 

@@ -7,15 +7,25 @@
 //!
 //! # What is modelled, what is real
 //!
-//! * **Decoding**: the bits are the encoder's real subframes (parity, HOW, 25-page rotation),
-//!   pushed bit by bit into the core's [`SubframeSync`] from [`BIT_SYNC_S`] after the channel
-//!   locked (the bit synchronizer's typical decision time; the samples of the sample-level
-//!   stretch carry random data bits, so its bit synchronizer is not run here), at the signal
-//!   time the satellite's bit left (light time and satellite clock included); each subframe
-//!   goes to the core's [`NavigationStore`]. A satellite has an ephemeris only when the store
-//!   assembled subframes 1–3 with agreeing IODE/IODC. No bit errors (below 10⁻⁶ above
-//!   35 dB-Hz).
-//! * **Pseudoranges**: `ρ = |R_z(−ω⊕τ) r_s(t − τ) − r(t)| + b(t) − c Δt_sv + ε`: the truth's
+//! * **Decoding in the sample-level stretch is real**: the samples carry the encoder's LNAV
+//!   bits at the signal time each left the satellite (light time and satellite clock
+//!   included, [`super::sample_level`]); the core's bit synchronizer and [`SubframeSync`] run
+//!   on each channel's 1 ms prompts (`NavChannel`, as in `track`), and what they decode and
+//!   refuse goes to the core's [`NavigationStore`] ([`Navigation::add_decoded`]; counted in
+//!   [`NavigationRecord::sample_level_subframes`]). A channel's pseudorange is used once its
+//!   own decoder holds subframe sync.
+//! * **Decoding on the fast path is modelled**: the same encoder's subframes (parity, HOW,
+//!   25-page rotation) pushed bit by bit into the core's [`SubframeSync`] from [`BIT_SYNC_S`]
+//!   after the channel locked (the bit synchronizer's typical decision time), at the signal
+//!   time the satellite's bit left; each subframe goes to the store. No bit errors (below
+//!   10⁻⁶ above 35 dB-Hz). During the stretch this model runs in the shadow of the real
+//!   decoder (its subframes dropped) so that a channel the stretch hands over synchronized
+//!   continues synchronized; one whose decoder had no subframe sync starts over. A satellite
+//!   has an ephemeris only when the store assembled subframes 1–3 with agreeing IODE/IODC.
+//! * **Pseudoranges** (the stretch's too: its channels' code phases with their decoded
+//!   subframes give the time of transmission, checked against the truth
+//!   ([`Navigation::check_transmit_time`], metric `sample_level_code_range_rms_m`) but not
+//!   used by the fixes yet): `ρ = |R_z(−ω⊕τ) r_s(t − τ) − r(t)| + b(t) − c Δt_sv + ε`: the truth's
 //!   satellite (almanac orbit, ECEF) at its time of transmission with the Sagnac rotation,
 //!   the truth's orbit, a receiver clock `b(t) = b0 + ḃ t` (TCXO: bias anywhere in ±1 ms,
 //!   drift of some 10⁻⁸), the satellite clock the encoder's signal carries, and ε with the
@@ -34,11 +44,13 @@ use gnss_attitude::nav::{
     line_of_sight, solve, Fix, GpsTime, NavigationStore, Observation, OrbitFilter,
     OrbitFilterConfig, ReferenceFrame, SolverConfig, StoreConfig, SubframeSync,
 };
+use gnss_attitude::nav::{Subframe, TransmitTime};
 use gnss_attitude::receiver::SatelliteAiding;
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 
+use super::sample_level::Decoded;
 use super::world::World;
 use crate::synth::lnav::{LnavBitStream, LnavEncoder, BIT_S};
 use crate::truth::gps::{AlmanacEntry, OMEGA_EARTH, WEEK_S};
@@ -136,6 +148,16 @@ pub struct NavigationRecord {
     pub pdop_mean: f64,
     /// Fixes the filter refused (its gate).
     pub filter_rejections: usize,
+    /// Subframes the sample-level stretch's channels decoded from their prompts.
+    pub sample_level_subframes: u32,
+    /// Subframes the stretch's decoders refused (parity).
+    pub sample_level_parity_failures: u32,
+    /// The stretch's decoded subframes, by PRN, in decoding order.
+    pub sample_level_decoded: Vec<(u8, Subframe)>,
+    /// The stretch's channels' times of transmission from their code phases and decoded
+    /// subframes, less the truth's (`c·Δt`, m; the code-phase pseudorange's error besides the
+    /// receiver clock), at whole seconds.
+    pub sample_level_code_errors_m: Vec<f64>,
 }
 
 /// The receiver's navigation over a flight.
@@ -221,10 +243,63 @@ impl Navigation {
         self.clock_bias_m + self.clock_drift_m_s * t
     }
 
+    /// What the sample-level stretch's channels decoded: the subframes into the store (and
+    /// the record), the refused ones counted by the store.
+    pub fn add_decoded(&mut self, decoded: Vec<Decoded>) {
+        for (prn, subframes, refused) in decoded {
+            for sf in subframes {
+                // an implausible or inconsistent set is counted by the store
+                let _ = self.store.add_subframe(prn, &sf);
+                self.record.sample_level_subframes += 1;
+                self.record.sample_level_decoded.push((prn, sf));
+            }
+            for e in refused {
+                self.store.record_decode_error(&e);
+                self.record.sample_level_parity_failures += 1;
+            }
+        }
+    }
+
+    /// The GPS week the stretch's decoders count in: a decoded subframe 1's, else the flight
+    /// computer's a-priori (the one it predicts the sky with).
+    pub fn week(&self) -> u16 {
+        self.store.week().unwrap_or(self.start.week)
+    }
+
+    /// Records the error of `prn`'s time of transmission `transmit` measured from its code
+    /// phase at flight time `t` against the truth's signal time.
+    pub fn check_transmit_time(&mut self, world: &World, prn: u8, t: f64, transmit: &TransmitTime) {
+        let (Some(sig), Ok(measured)) = (self.signal(world, prn, t), transmit.gps_time()) else {
+            return;
+        };
+        let weeks = f64::from(measured.week) - f64::from(self.encoder.almanac_week);
+        let measured_s = weeks * WEEK_S + measured.tow_s;
+        let truth_s = sig.transmit_s + sig.clock_s;
+        self.record
+            .sample_level_code_errors_m
+            .push(C * (measured_s - truth_s));
+    }
+
+    /// The hand-over from the sample-level stretch: the modelled decoders continue only for
+    /// the satellites whose real decoder holds subframe sync (`synchronized(prn)`); the
+    /// others start over.
+    pub fn hand_over(&mut self, synchronized: impl Fn(u8) -> bool) {
+        self.decoders.retain(|&prn, _| synchronized(prn));
+    }
+
     /// One navigation second at flight time `t`: decoders follow the `tracked` satellites
     /// (PRN, C/N0 in dB-Hz), their bits go into the store, the synchronized ones give
-    /// pseudoranges, and a fix goes to the filter.
-    pub fn second(&mut self, world: &World, t: f64, tracked: &[(u8, f64)]) {
+    /// pseudoranges, and a fix goes to the filter. `from_samples(prn)` is `Some(sync)` for a
+    /// satellite the sample-level stretch decodes (its subframes come through
+    /// [`Self::add_decoded`]; `sync`: its decoder holds subframe sync): the modelled decoder
+    /// then runs in the shadow, its subframes dropped.
+    pub fn second(
+        &mut self,
+        world: &World,
+        t: f64,
+        tracked: &[(u8, f64)],
+        from_samples: impl Fn(u8) -> Option<bool>,
+    ) {
         self.decoders
             .retain(|prn, _| tracked.iter().any(|(p, _)| p == prn));
         let mut observations = Vec::new();
@@ -239,14 +314,16 @@ impl Navigation {
                 sync: SubframeSync::new(),
                 next_bit: first_bit,
             });
-            let synchronized = decode_bits(
+            let real = from_samples(prn);
+            let modelled = decode_bits(
                 dec,
                 &self.encoder,
                 &mut self.bits,
-                &mut self.store,
+                real.is_none().then_some(&mut self.store),
                 prn,
                 signal_time,
             );
+            let synchronized = real.unwrap_or(modelled);
             if !synchronized {
                 continue;
             }
@@ -393,13 +470,13 @@ impl Navigation {
 }
 
 /// Pushes `prn`'s bits up to `signal_time` (s of the almanac's week, satellite clock) into
-/// its synchronizer and the store; whether the synchronizer holds subframe sync (the channel
-/// knows its time of transmission).
+/// its synchronizer and the store (`None`: the shadow of a real decoder, subframes dropped);
+/// whether the synchronizer holds subframe sync (the channel knows its time of transmission).
 fn decode_bits(
     dec: &mut SatelliteDecoder,
     encoder: &LnavEncoder,
     bits: &mut LnavBitStream,
-    store: &mut NavigationStore,
+    mut store: Option<&mut NavigationStore>,
     prn: u8,
     signal_time: f64,
 ) -> bool {
@@ -418,13 +495,13 @@ fn decode_bits(
             start_epoch: n * 20,
             strength: 1.0,
         };
-        match dec.sync.push(&bit) {
-            Ok(Some(subframe)) => {
+        match (dec.sync.push(&bit), store.as_deref_mut()) {
+            (Ok(Some(subframe)), Some(store)) => {
                 // an implausible or inconsistent set is counted by the store
                 let _ = store.add_subframe(prn, &subframe);
             }
-            Ok(None) => {}
-            Err(e) => store.record_decode_error(&e),
+            (Err(e), Some(store)) => store.record_decode_error(&e),
+            _ => {}
         }
     }
     dec.sync.synchronized()
@@ -478,7 +555,7 @@ mod tests {
                 .map(|s| s.view.prn)
                 .collect();
             let tracked: Vec<(u8, f64)> = prns.iter().map(|&p| (p, 45.0)).collect();
-            nav.second(&world, t, &tracked);
+            nav.second(&world, t, &tracked, |_| None);
             let _ = nav.aiding(&world, t + 0.5, u64::from(second) * 1000 + 500, &prns);
         }
         let r = &nav.record;

@@ -421,6 +421,7 @@ impl<'a> Flight<'a> {
         let sample_level = (sample_epochs > 0).then(|| {
             SampleLevel::new(
                 &world,
+                &navigation,
                 config.sample_level_s + SAMPLE_MARGIN_S,
                 config.seed,
                 &record.slips,
@@ -482,7 +483,24 @@ impl<'a> Flight<'a> {
         }
         if k % NAVIGATION_EVERY_EPOCHS == 0 {
             let tracked = self.tracked_for_navigation(&e);
-            self.navigation.second(&self.world, e.t0, &tracked);
+            let samples = self.sample_level.as_mut().filter(|_| e.in_samples);
+            if let Some(sl) = samples {
+                self.navigation.add_decoded(sl.take_decoded());
+                let week = self.navigation.week();
+                for &(prn, _) in &tracked {
+                    for (t, transmit) in sl.take_transmit_times(prn, week) {
+                        self.navigation
+                            .check_transmit_time(&self.world, prn, t, &transmit);
+                    }
+                }
+                let sl = &*sl;
+                self.navigation.second(&self.world, e.t0, &tracked, |prn| {
+                    Some(sl.subframe_synchronized(prn).unwrap_or(false))
+                });
+            } else {
+                self.navigation
+                    .second(&self.world, e.t0, &tracked, |_| None);
+            }
         }
         if block_start {
             self.set_aiding(&e)?;
@@ -503,9 +521,12 @@ impl<'a> Flight<'a> {
     /// The hand-over: the chain's locked satellites continue on the fast path, the core's
     /// channels close.
     fn hand_over(&mut self, t0: f64) {
-        let Some(sl) = self.sample_level.take() else {
+        let Some(mut sl) = self.sample_level.take() else {
             return;
         };
+        self.navigation.add_decoded(sl.take_decoded());
+        self.navigation
+            .hand_over(|prn| sl.subframe_synchronized(prn).unwrap_or(false));
         for prn in locked(&self.rx) {
             let cn0 = reported_cn0_dbhz(&self.rx, prn).unwrap_or(0.0);
             if let Some(ch) = self.channels.get_mut(&prn) {

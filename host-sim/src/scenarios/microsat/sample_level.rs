@@ -11,14 +11,26 @@
 //! Scene: every healthy satellite the reference antenna or another antenna receives during
 //! the stretch, its range, range rate, `μ·r_P(t)` and per-antenna C/N0 tabulated every
 //! [`TRACK_STEP_S`] from the world (so the signal switches off where an antenna stops
-//! receiving it), 50 bit/s data, the world's line biases; 2.6 Msps complex CS8 (noise σ = 16
-//! LSB). Receiver epoch `k` is centred on sample `(k + ½)·2600`.
+//! receiving it), the world's line biases; 2.6 Msps complex CS8 (noise σ = 16 LSB). Receiver
+//! epoch `k` is centred on sample `(k + ½)·2600`.
+//!
+//! Navigation message: each satellite's signal carries the encoder's LNAV bits
+//! ([`crate::synth::lnav`]) at the time they left the satellite, as the fast path's modelled
+//! decoding has them ([`Navigation::signal`]: light time with the Sagnac rotation, the
+//! satellite clock `Δt_sv`): the track's range is `ρ_eff = c (τ − Δt_sv)` and the code count
+//! starts at the subframe start before the signal time of the first sample
+//! ([`LnavModulation`], shared with `synth --lnav`), so the code phase at every sample is the
+//! time of transmission. The channels' prompts ([`SampleReceiver::push_samples_observed`])
+//! go through the core's bit and subframe synchronization ([`NavChannel`], as `track`'s), and
+//! the flight's navigation takes the subframes ([`SampleLevel::take_decoded`]).
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{anyhow, Result};
 use gnss_attitude::geometry::Quaternion;
+use gnss_attitude::nav::subframe::SubframeError;
+use gnss_attitude::nav::{Subframe, TransmitTime};
 use gnss_attitude::receiver::{
     AttitudeSource, SampleFrontConfig, SampleReceiver, SampleReport, MAX_SATELLITES,
 };
@@ -29,11 +41,15 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::fast_path::EPOCH_S;
+use super::navigation::Navigation;
 use super::world::{World, MASK_RAD};
 use crate::chain::{samples, ChainParams, ANTENNAS};
+use crate::record::navigation::NavChannel;
+use crate::record::synth_nav::LnavModulation;
+use crate::synth::lnav::LnavEncoder;
 use crate::synth::quantize::Planar;
 use crate::synth::quantize::Quantizer;
-use crate::synth::scene::{mix, L1_WAVELENGTH};
+use crate::synth::scene::{L1_WAVELENGTH, SPEED_OF_LIGHT};
 use crate::synth::{AttitudeMotion, CarrierStep, FrontEnd, Satellite, SatelliteTrack, Scene};
 
 /// Sample rate, Hz.
@@ -117,15 +133,21 @@ pub struct SampleLevel {
     stats: SampleStats,
     /// When each PRN's last search failed, s: searched again [`RETRY_AFTER_S`] later.
     failed_at: BTreeMap<u8, f64>,
+    /// The LNAV decoder of each PRN a channel tracked (bit and subframe sync on its prompts).
+    decoders: BTreeMap<u8, NavChannel>,
 }
 
-/// One satellite at one track point: PRN, range (m), range rate (m/s), `μ·r_P` (m) and C/N0
-/// (dB-Hz, `NEG_INFINITY` where not received) per antenna.
+/// What one satellite's channel decoded: its PRN, the subframes, the refused ones.
+pub type Decoded = (u8, Vec<Subframe>, Vec<SubframeError>);
+
+/// One satellite at one track point: PRN, pseudorange `ρ_eff` (m), its rate (m/s), `μ·r_P` (m)
+/// and C/N0 (dB-Hz, `NEG_INFINITY` where not received) per antenna.
 type TrackPoint = (u8, f64, f64, [f64; 3], [f64; 3]);
 
 /// The satellite tracks of `world` over `[0, duration_s]`: every healthy satellite some
-/// antenna receives at some point.
-fn tracks(world: &World, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
+/// antenna receives at some point, its range the signal's `ρ_eff = c (τ − Δt_sv)` as `nav`'s
+/// truth has it (so the code carries the time of transmission).
+fn tracks(world: &World, nav: &Navigation, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
     let n = (duration_s / TRACK_STEP_S).ceil() as usize + 2;
     let points: Vec<Vec<TrackPoint>> = (0..n)
         .into_par_iter()
@@ -136,7 +158,8 @@ fn tracks(world: &World, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
                 .sky
                 .views(t)
                 .iter()
-                .map(|v| {
+                .filter_map(|v| {
+                    let sig = nav.signal(world, v.prn, t)?;
                     let s = world.antenna_view(v, &c_ib, t);
                     let geometry =
                         [0, 1, 2].map(|p| v.los.dot(&(c_ib * world.antennas[p].position)));
@@ -147,7 +170,9 @@ fn tracks(world: &World, duration_s: f64) -> Vec<(u8, SatelliteTrack)> {
                             f64::NEG_INFINITY
                         }
                     });
-                    (v.prn, v.range, v.range_rate, geometry, cn0)
+                    let rho = sig.range_m - SPEED_OF_LIGHT * sig.clock_s;
+                    let rate = sig.range_rate_m_s - SPEED_OF_LIGHT * sig.clock_rate;
+                    Some((v.prn, rho, rate, geometry, cn0))
                 })
                 .collect()
         })
@@ -185,15 +210,17 @@ pub struct SampleSlip {
 }
 
 /// The chain set-up of the stretch: scene from the world's first `duration_s`, with `slips`
-/// in the carriers.
+/// in the carriers, the LNAV message at the signal times `nav`'s truth gives.
 pub fn chain_params(
     world: &World,
+    nav: &Navigation,
     duration_s: f64,
     seed: u64,
     slips: &[SampleSlip],
 ) -> ChainParams {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6d73_616d_706c_6573);
-    let satellites = tracks(world, duration_s)
+    let encoder = LnavEncoder::bundled();
+    let satellites = tracks(world, nav, duration_s)
         .into_iter()
         .map(|(prn, mut track)| {
             track.carrier_steps = slips
@@ -208,21 +235,30 @@ pub fn chain_params(
                 .collect();
             (prn, track)
         })
-        .map(|(prn, track)| Satellite {
-            prn,
-            cn0_dbhz: track
-                .cn0_dbhz
-                .iter()
-                .flatten()
-                .copied()
-                .fold(f64::NEG_INFINITY, f64::max),
-            doppler_hz: -track.range_rate_m_s[0] / L1_WAVELENGTH,
-            doppler_rate_hz_s: 0.0,
-            code_phase_chips: rng.random_range(0.0..1023.0),
-            carrier_phase_cycles: rng.random_range(0.0..1.0),
-            los_ref: Vector3::z(),
-            data_seed: Some(mix(seed, 0xda7a, u64::from(prn))),
-            track: Some(Arc::new(track)),
+        .filter_map(|(prn, mut track)| {
+            let sig = nav.signal(world, prn, 0.0)?;
+            let t_sv0 = sig.transmit_s + sig.clock_s;
+            let m = LnavModulation::new(&encoder, prn, encoder.almanac_week, t_sv0, duration_s);
+            track.data_bits = m.data_bits;
+            // (a code phase was drawn here before the message: the draw keeps the carrier
+            // phases of the seeds)
+            let _: f64 = rng.random_range(0.0..1023.0);
+            Some(Satellite {
+                prn,
+                cn0_dbhz: track
+                    .cn0_dbhz
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max),
+                doppler_hz: -track.range_rate_m_s[0] / L1_WAVELENGTH,
+                doppler_rate_hz_s: 0.0,
+                code_phase_chips: m.code_phase_chips,
+                carrier_phase_cycles: rng.random_range(0.0..1.0),
+                los_ref: Vector3::z(),
+                data_seed: None,
+                track: Some(Arc::new(track)),
+            })
         })
         .collect();
     let scene = Scene {
@@ -256,10 +292,12 @@ pub fn chain_params(
 }
 
 impl SampleLevel {
-    /// The stretch of `world`'s first `duration_s` drawn with `seed`, with `slips`.
-    /// `front_end` quantizes the samples the receiver gets.
+    /// The stretch of `world`'s first `duration_s` drawn with `seed`, with `slips`, the
+    /// signals' times of transmission from `nav`'s truth. `front_end` quantizes the samples
+    /// the receiver gets.
     pub fn new(
         world: &World,
+        nav: &Navigation,
         duration_s: f64,
         seed: u64,
         slips: &[SampleSlip],
@@ -267,7 +305,7 @@ impl SampleLevel {
     ) -> Self {
         let params = ChainParams {
             quantizer: front_end,
-            ..chain_params(world, duration_s, seed, slips)
+            ..chain_params(world, nav, duration_s, seed, slips)
         };
         let prns = params.scene.satellites.iter().map(|s| s.prn).collect();
         let mut stats = SampleStats {
@@ -290,7 +328,40 @@ impl SampleLevel {
             block: None,
             stats,
             failed_at: BTreeMap::new(),
+            decoders: BTreeMap::new(),
         }
+    }
+
+    /// What each satellite's channel decoded since the last call (PRN order).
+    pub fn take_decoded(&mut self) -> Vec<Decoded> {
+        self.decoders
+            .values_mut()
+            .map(|d| {
+                let (subframes, refused) = d.take_decoded();
+                (d.prn(), subframes, refused)
+            })
+            .filter(|(_, s, r)| !s.is_empty() || !r.is_empty())
+            .collect()
+    }
+
+    /// The times of transmission `prn`'s channel measured from its code phase at the whole
+    /// seconds since the last call (flight time s, the time), its decoder given `week` first.
+    pub fn take_transmit_times(&mut self, prn: u8, week: u16) -> Vec<(f64, TransmitTime)> {
+        let Some(d) = self.decoders.get_mut(&prn) else {
+            return Vec::new();
+        };
+        d.set_week(week);
+        d.take_transmit_times()
+            .into_iter()
+            .map(|(sample, t)| (sample as f64 / SAMPLE_RATE_HZ, t))
+            .collect()
+    }
+
+    /// Whether `prn`'s decoder holds subframe sync (`None`: no channel has tracked it).
+    pub fn subframe_synchronized(&self, prn: u8) -> Option<bool> {
+        self.decoders
+            .get(&prn)
+            .map(NavChannel::subframe_synchronized)
     }
 
     /// The front-end configuration of the core's receiver for this stretch.
@@ -426,8 +497,15 @@ impl SampleLevel {
             &planar.q[2][r],
         ];
         let block = SampleBlock::complex(first, iv, qv)?;
+        let decoders = &mut self.decoders;
         let report = rx
-            .push_samples(&block)
+            .push_samples_observed(&block, &mut |prn, epoch, locked| {
+                let p = prn.number();
+                decoders
+                    .entry(p)
+                    .or_insert_with(|| NavChannel::new(p, SAMPLE_RATE_HZ))
+                    .epoch(epoch, locked);
+            })
             .map_err(|e| anyhow!("samples of epoch {k}: {e}"))?;
         self.stats.tracking_s += started.elapsed().as_secs_f64();
         self.stats.observations += report.observations as usize;
