@@ -348,10 +348,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     /// [`ReceiverError::Tracking`] for a block that does not continue the stream (the
     /// channels are then unusable: release them); [`ReceiverError::NonFinite`] /
     /// [`ReceiverError::InvalidInput`] for an epoch the adapter or the receiver refuses.
-    pub fn push_samples(
-        &mut self,
-        block: &C::Block<'_>,
-    ) -> Result<SampleReport, ReceiverError> {
+    pub fn push_samples(&mut self, block: &C::Block<'_>) -> Result<SampleReport, ReceiverError> {
         self.push_samples_observed(block, &mut |_, _, _| {})
     }
 
