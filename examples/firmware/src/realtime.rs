@@ -24,8 +24,9 @@
 //! Then flash, static RAM and the worst stack (painted at reset by cortex-m-rt's
 //! `paint-stack`, repainted after the construction and after the acquisition to measure each
 //! phase). Linked for QEMU's `mps2-an386` (feature `qemu-mps2`, 4 MiB RAM): the receiver's
-//! construction (`SampleReceiver::new`, by value: its frame alone is 123 KB) does not fit an
-//! STM32F405's 128 KiB; the firmware prints what each phase needs against that target.
+//! construction (`SampleReceiver::with_settings`, by value: its frame alone is 124 KB, the
+//! receiver 101 KB) does not fit an STM32F405's 128 KiB; the firmware prints what each phase
+//! needs against that target.
 #![no_std]
 #![no_main]
 
@@ -84,7 +85,7 @@ fn main() -> ! {
     let (flash, ram) = memory::flash_and_static();
     let worst = stacks[0].max(stacks[1]).max(stacks[2]);
     hprintln!(
-        "realtime memory: flash {} B, static RAM {} B, worst stack {} B (construction, SampleReceiver::new: {} B; acquisition: {} B; tracking, the receiver's {} B + the 1 ms block + synthesis + push_samples: {} B), RAM (static + worst stack) {} B",
+        "realtime memory: flash {} B, static RAM {} B, worst stack {} B (construction, SampleReceiver::with_settings: {} B; acquisition: {} B; tracking, the receiver's {} B + the 1 ms block's bytes and planes + synthesis + push_samples + run_deferred: {} B), RAM (static + worst stack) {} B",
         flash,
         ram,
         worst,

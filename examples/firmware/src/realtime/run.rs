@@ -127,7 +127,7 @@ pub struct Outcome {
     pub source: AttitudeSource,
     /// Attitude error at the end, degrees.
     pub error_deg: f32,
-    /// Worst stack of the receiver's construction (`SampleReceiver::new`), bytes from the
+    /// Worst stack of the receiver's construction (`SampleReceiver::with_settings`), bytes from the
     /// stack's top.
     pub construction_stack: usize,
     /// Worst stack of the acquisition (the receiver in `run`'s frame, the searched samples,
@@ -174,7 +174,7 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd) -> usize {
 }
 
 /// The whole run of one front end: the receiver built (on the stack, bound inside its
-/// `Result`: one copy of its 70 KB), then [`stream`] in a frame of its own.
+/// `Result`: one copy of its 101 KB), then [`stream`] in a frame of its own.
 #[inline(never)]
 pub fn run(front_end: FrontEnd) -> Outcome {
     // (through an opaque function pointer: `new` keeps a frame of its own instead of
