@@ -6,21 +6,27 @@
 //!
 //! 1. the samples of 3 antennas × 8 satellites (2.6 Msps complex, 45 dB-Hz, the example
 //!    flight's attitude, lines of sight and line biases as the embedded truth) are synthesized
-//!    in 2 ms blocks into one static buffer ([`synth`]), outside the counted region;
+//!    in 1 ms blocks as the front end's `sm2iq` bytes ([`synth`], [`frontend`]), outside the
+//!    counted region;
 //! 2. acquisition before the counted region: every PRN searched (`SampleReceiver::search`, ±2.5
 //!    kHz, 6 ms non-coherent + the 6 ms dwell) on the reference antenna's first 12 ms; the
 //!    receiver gets the lines of sight as its aiding (every 100 ms) and the gyro's increments;
-//! 3. warm-up until the attitude comes from the fine filter, [`run::SETTLE_MS`] more, then
-//!    [`run::COUNT_MS`] of blocks, each block's `push_samples` (and the gyro increments that
-//!    end in it) between the marker instructions; the firmware prints which regions are that
-//!    front end's, `.ci/run` sums the plugin's counts into instructions per 1 ms;
+//! 3. the receiver runs the bit-parallel correlators (`SampleReceiver<8, 1024,
+//!    BitCorrelator<3>>`, 1- or 2-bit planes, [`run::CARRIER`]) with its block and window
+//!    stages deferred (`set_deferred_stages`); warm-up until the attitude comes from the fine
+//!    filter, [`run::SETTLE_MS`] more, then [`run::COUNT_MS`] of blocks, each as three counted
+//!    regions: the bytes packed into the antennas' bit planes (`PlaneBuffer::pack_bytes`),
+//!    `push_samples` with the gyro increments that end in the block (the 1 ms path), and
+//!    `run_deferred`; the firmware prints which regions are that front end's, `.ci/run` sums
+//!    the plugin's counts into instructions per 1 ms, per stage;
 //! 4. the verdict: fine attitude within [`run::LIMIT_DEG`] of the truth, or exit failure.
 //!
 //! Then flash, static RAM and the worst stack (painted at reset by cortex-m-rt's
 //! `paint-stack`, repainted after the construction and after the acquisition to measure each
 //! phase). Linked for QEMU's `mps2-an386` (feature `qemu-mps2`, 4 MiB RAM): the receiver's
-//! construction (`SampleReceiver::new`, by value: its frame alone is 123 KB) does not fit an
-//! STM32F405's 128 KiB; the firmware prints what each phase needs against that target.
+//! construction (`SampleReceiver::with_settings`, by value: its frame alone is 124 KB, the
+//! receiver 101 KB) does not fit an STM32F405's 128 KiB; the firmware prints what each phase
+//! needs against that target.
 #![no_std]
 #![no_main]
 
@@ -41,16 +47,17 @@ use frontend::FrontEnd;
 #[entry]
 fn main() -> ! {
     hprintln!(
-        "realtime: SampleReceiver<{}, 1024> {} B (i8 correlators), 3 antennas x 8 satellites, 2.6 Msps complex, {} ms blocks, {} ms counted per front end",
+        "realtime: SampleReceiver<{}, 1024, BitCorrelator<3>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from sm2iq bytes, {} ms blocks, {} ms counted per front end",
         run::CHANNELS,
         core::mem::size_of::<run::Front>(),
+        run::CARRIER,
         run::BLOCK_MS,
         run::COUNT_MS
     );
     hprintln!(
-        "realtime sizes: Acquisition<1024> {} B, Channel<3> {} B (x 8), AttitudeReceiver {} B, ObservationAdapter {} B",
+        "realtime sizes: Acquisition<1024> {} B, Channel<3, BitCorrelator<3>> {} B (x 8), AttitudeReceiver {} B, ObservationAdapter {} B",
         core::mem::size_of::<gnss_attitude::tracking::Acquisition<1024>>(),
-        core::mem::size_of::<gnss_attitude::tracking::Channel<3>>(),
+        core::mem::size_of::<gnss_attitude::tracking::Channel<3, gnss_attitude::signal::bitwise::BitCorrelator<3>>>(),
         core::mem::size_of::<gnss_attitude::receiver::AttitudeReceiver>(),
         core::mem::size_of::<gnss_attitude::receiver::ObservationAdapter>()
     );
@@ -59,7 +66,7 @@ fn main() -> ! {
     for front_end in FrontEnd::ALL {
         let o = run::run(front_end);
         hprintln!(
-            "realtime {}: regions {}..={} count {} ms of push_samples (+ gyro increments); fine from epoch {:?}; final attitude {:?}, error {} deg (limit {} deg): {}",
+            "realtime {}: regions {}..={} count {} ms, 3 regions per ms (pack the bytes into planes; push_samples + gyro increments; run_deferred); fine from epoch {:?}; final attitude {:?}, error {} deg (limit {} deg): {}",
             front_end.name(),
             o.regions.0,
             o.regions.1,
@@ -78,7 +85,7 @@ fn main() -> ! {
     let (flash, ram) = memory::flash_and_static();
     let worst = stacks[0].max(stacks[1]).max(stacks[2]);
     hprintln!(
-        "realtime memory: flash {} B, static RAM {} B, worst stack {} B (construction, SampleReceiver::new: {} B; acquisition: {} B; tracking, the receiver's {} B + the 1 ms block + synthesis + push_samples: {} B), RAM (static + worst stack) {} B",
+        "realtime memory: flash {} B, static RAM {} B, worst stack {} B (construction, SampleReceiver::with_settings: {} B; acquisition: {} B; tracking, the receiver's {} B + the 1 ms block's bytes and planes + synthesis + push_samples + run_deferred: {} B), RAM (static + worst stack) {} B",
         flash,
         ram,
         worst,

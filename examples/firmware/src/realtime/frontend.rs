@@ -1,16 +1,17 @@
 //! The front ends the real-time firmware feeds the receiver: 1-bit and 2-bit sign/magnitude
 //! complex samples, as the NT1065 / MAX2769 class of RF front ends deliver them.
 //!
-//! Today the receiver's correlator takes `i8` samples, so each quantized level is handed over
-//! as the `i8` value host-sim uses for the same front end (`host-sim/src/synth/quantize.rs`):
+//! The front end delivers bytes in the core's `SampleFormat::SignMagnitude2 { complex: true }`
+//! layout (`sm2iq`: one byte per two complex samples, fields `I0 Q0 I1 Q1` from the most
+//! significant bits, each field `sign·2 + magnitude`); the 1-bit front end delivers the same
+//! layout with every magnitude bit 0 (its ADC has no magnitude output). The firmware packs
+//! those bytes into the antennas' bit planes with the core's packing
+//! (`PlaneBuffer::pack_bytes`), as it would from a DMA buffer; the acquisition takes the
+//! `i8` values host-sim uses for the same front end (`host-sim/src/synth/quantize.rs`):
 //! 1-bit `±16`, 2-bit `±8, ±24` (threshold 1σ).
-//!
-//! Swapping in the bit-parallel correlator (branch `h-bitrx`, `SampleReceiver` generic over the
-//! correlator): `run::Front` names the receiver type; `run::stream` builds each 1 ms block from
-//! the buffer the synthesizer fills. For the bit path, the synthesizer's output goes through
-//! the core's packing (the sign and magnitude bit planes of each antenna, from these same `i8`
-//! levels or from the front end's byte layout) into the block type the bit correlator takes,
-//! and `Front` gets its correlator parameter; the acquisition keeps the `i8` samples.
+
+use gnss_attitude::signal::bitwise::{PlaneFormat, Resolution};
+use gnss_attitude::signal::SampleFormat;
 
 /// A front end: how many bits per component the ADC delivers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +30,9 @@ pub const BIT1_LSB_PER_LEVEL: i8 = 16;
 /// `±8, ±24`).
 pub const SM2_LSB_PER_LEVEL: i8 = 8;
 
+/// The byte layout the front ends deliver (`sm2iq`).
+pub const SM2IQ: SampleFormat = SampleFormat::SignMagnitude2 { complex: true };
+
 impl FrontEnd {
     /// Both front ends, in the order the firmware runs them.
     pub const ALL: [FrontEnd; 2] = [FrontEnd::OneBit, FrontEnd::TwoBit];
@@ -41,7 +45,28 @@ impl FrontEnd {
         }
     }
 
-    /// The sample value the (i8) correlator receives for the analog component `x` (noise σ = 1).
+    /// The bit planes the receiver's correlators read for this front end: 1- or 2-bit,
+    /// complex.
+    pub fn plane_format(self) -> PlaneFormat {
+        let resolution = match self {
+            FrontEnd::OneBit => Resolution::OneBit,
+            FrontEnd::TwoBit => Resolution::TwoBit,
+        };
+        PlaneFormat { resolution, complex: true }
+    }
+
+    /// The 2-bit `sm2iq` field the ADC outputs for the analog component `x` (noise σ = 1):
+    /// sign (1 = negative) in bit 1, magnitude (1 = large; always 0 for 1-bit) in bit 0.
+    #[inline(always)]
+    pub fn field(self, x: f32) -> u8 {
+        let sign = u8::from(x < 0.0) << 1;
+        match self {
+            FrontEnd::OneBit => sign,
+            FrontEnd::TwoBit => sign | u8::from(x.abs() > TWO_BIT_THRESHOLD),
+        }
+    }
+
+    /// The sample value the acquisition (i8) correlator receives for the analog component `x` (noise σ = 1).
     #[inline(always)]
     pub fn quantize(self, x: f32) -> i8 {
         match self {

@@ -8,18 +8,22 @@ use cortex_m_semihosting::hprintln;
 use gnss_attitude::attitude::example::SKY;
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, SampleFrontConfig, SampleReceiver, SampleReport};
-use gnss_attitude::signal::{Prn, SampleBlock};
-use gnss_attitude::tracking::TrackingError;
+use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneError};
+use gnss_attitude::signal::nco::CodeNco;
+use gnss_attitude::signal::{BitSettings, Prn, CA_CHIP_RATE_HZ};
 
-use super::frontend::FrontEnd;
+use super::frontend::{FrontEnd, SM2IQ};
 use super::memory;
 use super::synth::{Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
 
 /// Channels (one per satellite; each tracks the three antennas).
 pub const CHANNELS: usize = 8;
-/// The receiver: 8 channels, 1024-point acquisition. The correlator is today's i8 one; the
-/// bit-parallel correlator (branch `h-bitrx`) makes it a type parameter.
-pub type Front = SampleReceiver<CHANNELS, 1024>;
+/// The receiver: 8 channels, 1024-point acquisition, bit-parallel correlators over the three
+/// antennas' bit planes.
+pub type Front = SampleReceiver<CHANNELS, 1024, BitCorrelator<3>>;
+/// The carrier replica's levels: the 2-level replica (the M4F's cheaper kernel; 0.91 dB of
+/// carrier quantization against 0.35 dB for the 3-level one, docs/METHODS.md).
+pub const CARRIER: CarrierLevels = CarrierLevels::Two;
 /// Receiver epochs per synthesized block.
 pub const BLOCK_MS: usize = 1;
 /// Samples per antenna and component in a block.
@@ -29,8 +33,16 @@ pub const BLOCK: usize = SAMPLES_PER_MS * BLOCK_MS;
 pub const ACQUISITION_MS: u16 = 6;
 /// Samples per component the acquisition searches and verifies on (`2 K` ms + 1).
 pub const ACQUISITION_SAMPLES: usize = 2 * ACQUISITION_MS as usize * SAMPLES_PER_MS + 1;
-/// The streaming sample buffer: I and Q of three antennas, one block.
-pub const BUFFER: usize = 6 * BLOCK;
+/// The front end's bytes of one antenna and block (`sm2iq`: two complex samples per byte).
+pub const BLOCK_BYTES: usize = BLOCK / 2;
+/// Plane words per antenna and block (32 samples per word).
+pub const WORDS: usize = BLOCK.div_ceil(32);
+/// The code step of the front end's sample rate, 2⁻³² chip per sample (`CodeNco::step_for`,
+/// checked against it at run time).
+const CODE_STEP: u64 = (CA_CHIP_RATE_HZ / SAMPLE_RATE_HZ * 4_294_967_296.0 + 0.5) as u64;
+/// The chip-to-sample expansion table of the front end's rate, built at compile time (8 KiB of
+/// flash, shared by every channel).
+static CODE_TABLE: CodeTable = CodeTable::from_step(CODE_STEP);
 /// Longest warm-up to fine attitude, receiver epochs (ms).
 pub const WARM_UP_MAX_MS: u64 = 3000;
 /// Epochs run in fine attitude before the counted stretch starts.
@@ -71,15 +83,36 @@ pub fn front_config() -> SampleFrontConfig {
     c
 }
 
-/// One block of the stream handed to the receiver (counted): the front end's samples of the
-/// three antennas, `i`/`q`, first sample `first`. The one place the bit-parallel path changes
-/// (with `Front`): there the front end's bytes are packed into the antennas' bit planes here
-/// (`PlaneBuffer::pack_bytes`, counted as the receiver's work) and the receiver built with
-/// `SampleReceiver::with_settings` takes the `BitBlock`.
+/// Why a block did not reach the receiver, or what the receiver refused.
+// (the fields are read by the refusal's `Debug` print)
+#[allow(dead_code)]
+#[derive(Debug)]
+pub enum BlockError {
+    /// The front end's bytes did not pack into a whole block of planes (the packing's error;
+    /// `PlaneLength` for a short block).
+    Plane(PlaneError),
+    /// The receiver refused the block.
+    Receiver(ReceiverError),
+}
+
+/// The antennas' bit planes of one block, packed from the front end's bytes (`sm2iq`) with
+/// the core's packing, as firmware would from the DMA buffer (counted: the receiver's work).
 #[inline(always)]
-fn push_block(rx: &mut Front, first: u64, i: [&[i8]; 3], q: [&[i8]; 3]) -> Result<SampleReport, ReceiverError> {
-    let block = SampleBlock::complex(first, i, q).map_err(|e| ReceiverError::Tracking(TrackingError::Signal(e)))?;
-    rx.push_samples(&block)
+fn pack_block(planes: &mut [PlaneBuffer<WORDS>; 3], bytes: [&[u8]; 3]) -> Result<(), BlockError> {
+    for (p, b) in planes.iter_mut().zip(bytes) {
+        if p.pack_bytes(SM2IQ, b, 0).map_err(BlockError::Plane)? != BLOCK {
+            return Err(BlockError::Plane(PlaneError::PlaneLength));
+        }
+    }
+    Ok(())
+}
+
+/// One block of the stream handed to the receiver (counted): the antennas' planes, first
+/// sample `first`, with the front end's code table.
+#[inline(always)]
+fn push_block(rx: &mut Front, first: u64, planes: &[PlaneBuffer<WORDS>; 3]) -> Result<SampleReport, BlockError> {
+    let block = BitBlock::new(first, &CODE_TABLE, [planes[0].planes(), planes[1].planes(), planes[2].planes()]).map_err(BlockError::Plane)?;
+    rx.push_samples(&block).map_err(BlockError::Receiver)
 }
 
 /// What one front end's run gave.
@@ -94,7 +127,7 @@ pub struct Outcome {
     pub source: AttitudeSource,
     /// Attitude error at the end, degrees.
     pub error_deg: f32,
-    /// Worst stack of the receiver's construction (`SampleReceiver::new`), bytes from the
+    /// Worst stack of the receiver's construction (`SampleReceiver::with_settings`), bytes from the
     /// stack's top.
     pub construction_stack: usize,
     /// Worst stack of the acquisition (the receiver in `run`'s frame, the searched samples,
@@ -141,15 +174,17 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd) -> usize {
 }
 
 /// The whole run of one front end: the receiver built (on the stack, bound inside its
-/// `Result`: one copy of its 70 KB), then [`stream`] in a frame of its own.
+/// `Result`: one copy of its 101 KB), then [`stream`] in a frame of its own.
 #[inline(never)]
 pub fn run(front_end: FrontEnd) -> Outcome {
     // (through an opaque function pointer: `new` keeps a frame of its own instead of
     // inlining its temporaries into this one)
-    let new: fn(ReceiverConfig, SampleFrontConfig) -> Result<Front, ReceiverError> = black_box(Front::new);
-    let mut made = new(ExampleFlight::config(true), front_config());
+    let new: fn(ReceiverConfig, SampleFrontConfig, BitSettings) -> Result<Front, ReceiverError> = black_box(Front::with_settings);
+    let settings = BitSettings { format: front_end.plane_format(), carrier: CARRIER };
+    let mut made = new(ExampleFlight::config(true), front_config(), settings);
     match made.as_mut() {
         Ok(rx) => {
+            rx.receiver_mut().set_deferred_stages(true);
             // the construction's high-water mark, then the stream's own
             let sp = memory::sp();
             let built = memory::stack_top() - sp + memory::used_below(sp);
@@ -183,7 +218,8 @@ pub fn run(front_end: FrontEnd) -> Outcome {
 /// reported apart from the construction's.
 #[inline(never)]
 fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
-    let mut buf = [0i8; BUFFER];
+    let mut bytes = [[0u8; BLOCK_BYTES]; 3];
+    let mut planes = [(); 3].map(|_| PlaneBuffer::<WORDS>::new(front_end.plane_format()));
     let mut out = Outcome {
         fine_at: None,
         regions: (0, 0),
@@ -209,6 +245,10 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
     synth.skip(start - synth.next_sample());
 
     let mut refusals = 0u32;
+    if CODE_TABLE.step() != CodeNco::step_for(CA_CHIP_RATE_HZ, SAMPLE_RATE_HZ) {
+        hprintln!("realtime {}: code table step {} is not the sample rate's", front_end.name(), CODE_TABLE.step());
+        refusals += 1;
+    }
     let mut total = SampleReport::default();
     let mut gyro_next = 0u64;
     let mut first_region = None;
@@ -220,35 +260,42 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
             refusals += u32::from(rx.receiver_mut().set_aiding(&synth.flight().aiding(e0)).is_err());
         }
         synth.set_geometry(e0);
-        let (i, q) = buf.split_at_mut(3 * BLOCK);
-        let (i0, i) = i.split_at_mut(BLOCK);
-        let (i1, i2) = i.split_at_mut(BLOCK);
-        let (q0, q) = q.split_at_mut(BLOCK);
-        let (q1, q) = q.split_at_mut(BLOCK);
-        let (q2, _) = q.split_at_mut(BLOCK);
-        synth.fill(front_end, &mut [&mut *i0, &mut *i1, &mut *i2], &mut [&mut *q0, &mut *q1, &mut *q2]);
-        let (i, q) = ([&*i0, &*i1, &*i2], [&*q0, &*q1, &*q2]);
+        {
+            let [b0, b1, b2] = &mut bytes;
+            synth.fill_bytes(front_end, [&mut b0[..], &mut b1[..], &mut b2[..]]);
+        }
         let counting = out.fine_at.is_some_and(|f| e0 >= f + SETTLE_MS);
         let flight = synth.flight();
-        // the receiver's work of one block: the gyro increments that end in it, its samples
-        let work = |rx: &mut Front, gyro_next: &mut u64| {
+        let input = [&bytes[0][..], &bytes[1][..], &bytes[2][..]];
+        // the receiver's work of one block, in three stages: the front end's bytes packed
+        // into planes; the gyro increments that end in the block and its samples (the 1 ms
+        // path); the stages deferred out of it
+        let pack = |planes: &mut [PlaneBuffer<WORDS>; 3]| pack_block(planes, black_box(input));
+        let work = |rx: &mut Front, gyro_next: &mut u64, planes: &[PlaneBuffer<WORDS>; 3]| {
             let mut refused = 0u32;
             while 10 * (*gyro_next + 1) < e0 + BLOCK_MS as u64 {
                 refused += u32::from(rx.receiver_mut().push_gyro_increment(&flight.gyro_increment(*gyro_next)).is_err());
                 *gyro_next += 1;
             }
-            (refused, push_block(rx, first, black_box(i), black_box(q)))
+            (refused, push_block(rx, first, planes))
         };
-        let (refused, report) = if counting {
-            let (n, r) = count(|| work(&mut *rx, &mut gyro_next));
+        let deferred = |rx: &mut Front| rx.receiver_mut().run_deferred();
+        let (packed, (refused, report)) = if counting {
+            let (n, packed) = count(|| pack(&mut planes));
+            let (_, r) = count(|| work(&mut *rx, &mut gyro_next, &planes));
+            let (m, _) = count(|| deferred(&mut *rx));
             first_region.get_or_insert(n);
-            last_region = n;
+            last_region = m;
             out.counted_ms += BLOCK_MS as u64;
-            r
+            (packed, r)
         } else {
-            work(&mut *rx, &mut gyro_next)
+            let packed = pack(&mut planes);
+            let r = work(&mut *rx, &mut gyro_next, &planes);
+            deferred(&mut *rx);
+            (packed, r)
         };
         refusals += refused;
+        let report = packed.and(report);
         match report {
             Ok(r) => {
                 total.epochs += r.epochs;
@@ -300,7 +347,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         && refusals == 0;
     let cn0 = rx.channels().map(|c| c.cn0_dbhz).fold(0.0f32, |a, c| a + c) / rx.channels().count().max(1) as f32;
     hprintln!(
-        "realtime {}: {} of {} satellites acquired, {} channels locked (mean C/N0 {} dB-Hz), {} observations, {} late, {} without aiding, {} channels released, {} calls refused",
+        "realtime {}: {} of {} satellites acquired, {} channels locked (mean C/N0 {} dB-Hz), {} observations, {} late, {} without aiding, {} channels released, {} deferred overruns, {} calls refused",
         front_end.name(),
         detected,
         SKY.len(),
@@ -310,6 +357,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         total.late,
         total.without_aiding,
         total.released,
+        rx.receiver().deferred_overruns(),
         refusals
     );
     out

@@ -196,10 +196,37 @@ impl Synth {
     }
 
     /// The stream's next `out_i[0].len()` samples of the first `antennas` antennas (all
-    /// slices the same length), quantized by `front_end`.
+    /// slices the same length), quantized by `front_end` to the acquisition's `i8` levels.
     pub fn fill(&mut self, front_end: FrontEnd, out_i: &mut [&mut [i8]], out_q: &mut [&mut [i8]]) {
         let antennas = out_i.len().min(out_q.len()).min(3);
         let len = out_i.first().map_or(0, |s| s.len());
+        self.generate(antennas, len, |p, start, re, im| {
+            let (oi, oq) = (&mut out_i[p][start..start + re.len()], &mut out_q[p][start..start + re.len()]);
+            for k in 0..re.len() {
+                oi[k] = front_end.quantize(re[k]);
+                oq[k] = front_end.quantize(im[k]);
+            }
+        });
+    }
+
+    /// The stream's next `2 · out[0].len()` complex samples of the three antennas as the
+    /// front end delivers them: `sm2iq` bytes ([`super::frontend::SM2IQ`], two samples per
+    /// byte, first sample in the most significant bits), one stream per antenna.
+    pub fn fill_bytes(&mut self, front_end: FrontEnd, out: [&mut [u8]; 3]) {
+        let len = 2 * out[0].len();
+        let mut out = out;
+        self.generate(3, len, |p, start, re, im| {
+            let bytes = &mut out[p][start / 2..(start + re.len()) / 2];
+            for (b, (i, q)) in bytes.iter_mut().zip(re.chunks_exact(2).zip(im.chunks_exact(2))) {
+                *b = front_end.field(i[0]) << 6 | front_end.field(q[0]) << 4 | front_end.field(i[1]) << 2 | front_end.field(q[1]);
+            }
+        });
+    }
+
+    /// Generates the next `len` samples of the first `antennas` antennas in chunks of
+    /// [`CHUNK`] (even, so that byte outputs stay aligned): `out(antenna, first, re, im)` takes
+    /// each chunk's analog components (noise σ = 1).
+    fn generate(&mut self, antennas: usize, len: usize, mut out: impl FnMut(usize, usize, &[f32], &[f32])) {
         let mut start = 0;
         while start < len {
             let n = CHUNK.min(len - start);
@@ -231,11 +258,7 @@ impl Synth {
                 }
             }
             for p in 0..antennas {
-                let (oi, oq) = (&mut out_i[p][start..start + n], &mut out_q[p][start..start + n]);
-                for k in 0..n {
-                    oi[k] = front_end.quantize(re[p][k]);
-                    oq[k] = front_end.quantize(im[p][k]);
-                }
+                out(p, start, &re[p][..n], &im[p][..n]);
             }
             start += n;
         }
