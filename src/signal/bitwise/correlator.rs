@@ -513,10 +513,10 @@ impl<const A: usize> BitCorrelator<A> {
         let step = self.code.step;
         // Code phase at the first sample of the first prompt word.
         // (lead < 32, back a few words, the step below 2³³: no product wraps)
-        let behind = ((lead.saturating_add(back.saturating_mul(WORD_SAMPLES))) as u64)
-            .wrapping_mul(step)
-            % CODE_WRAP;
-        let first = (self.code.phase % CODE_WRAP + CODE_WRAP - behind) % CODE_WRAP;
+        let behind =
+            ((lead.saturating_add(back.saturating_mul(WORD_SAMPLES))) as u64).wrapping_mul(step);
+        let behind = code::wrap_code(behind);
+        let first = code::wrap_code(code::wrap_code(self.code.phase) + CODE_WRAP - behind);
         let mut at = CodeCursor::from_phase(first);
         let word_step = (WORD_SAMPLES as u64).wrapping_mul(step);
         let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
