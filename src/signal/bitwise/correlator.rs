@@ -603,6 +603,13 @@ impl Workspace {
 fn window_words(out: &mut [u32], prompt: &[u32; PROMPT_WORDS], offset: usize) {
     let sh = (offset % WORD_SAMPLES) as u32;
     let src = prompt.get(offset / WORD_SAMPLES..).unwrap_or_default();
+    if sh == 0 {
+        // A whole-word offset (the prompt tap): a copy.
+        for (o, &w) in out.iter_mut().zip(src) {
+            *o = w;
+        }
+        return;
+    }
     for (o, pair) in out.iter_mut().zip(src.windows(2)) {
         if let &[lo, hi] = pair {
             *o = (lo >> sh) | ((hi << 1) << (31 - sh));
