@@ -129,6 +129,19 @@ pub(crate) fn extended_code(prn: Prn) -> [u8; EXT_BYTES] {
     out
 }
 
+/// `x mod CODE_WRAP`, without a 64-bit division (a library call on the Cortex-M4) for
+/// `x < 2·CODE_WRAP`, the phases the word loop meets.
+#[inline(always)]
+pub(crate) fn wrap_code(x: u64) -> u64 {
+    if x < CODE_WRAP {
+        x
+    } else if x < 2 * CODE_WRAP {
+        x - CODE_WRAP
+    } else {
+        x % CODE_WRAP
+    }
+}
+
 /// The code NCO's state at a word start, split for the word loop: chip index `chip`
 /// (`0 … 1022`) and fraction `frac` (2⁻³² chip).
 #[derive(Clone, Copy, Debug)]
@@ -142,7 +155,7 @@ impl CodeCursor {
     /// From a phase in `[0, CODE_WRAP)`.
     #[inline(always)]
     pub(crate) fn from_phase(phase: u64) -> Self {
-        let phase = phase % CODE_WRAP;
+        let phase = wrap_code(phase);
         Self {
             chip: (phase >> 32) as u32,
             frac: phase as u32,

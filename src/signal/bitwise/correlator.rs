@@ -513,10 +513,10 @@ impl<const A: usize> BitCorrelator<A> {
         let step = self.code.step;
         // Code phase at the first sample of the first prompt word.
         // (lead < 32, back a few words, the step below 2³³: no product wraps)
-        let behind = ((lead.saturating_add(back.saturating_mul(WORD_SAMPLES))) as u64)
-            .wrapping_mul(step)
-            % CODE_WRAP;
-        let first = (self.code.phase % CODE_WRAP + CODE_WRAP - behind) % CODE_WRAP;
+        let behind =
+            ((lead.saturating_add(back.saturating_mul(WORD_SAMPLES))) as u64).wrapping_mul(step);
+        let behind = code::wrap_code(behind);
+        let first = code::wrap_code(code::wrap_code(self.code.phase) + CODE_WRAP - behind);
         let mut at = CodeCursor::from_phase(first);
         let word_step = (WORD_SAMPLES as u64).wrapping_mul(step);
         let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
@@ -603,6 +603,13 @@ impl Workspace {
 fn window_words(out: &mut [u32], prompt: &[u32; PROMPT_WORDS], offset: usize) {
     let sh = (offset % WORD_SAMPLES) as u32;
     let src = prompt.get(offset / WORD_SAMPLES..).unwrap_or_default();
+    if sh == 0 {
+        // A whole-word offset (the prompt tap): a copy.
+        for (o, &w) in out.iter_mut().zip(src) {
+            *o = w;
+        }
+        return;
+    }
     for (o, pair) in out.iter_mut().zip(src.windows(2)) {
         if let &[lo, hi] = pair {
             *o = (lo >> sh) | ((hi << 1) << (31 - sh));

@@ -110,44 +110,49 @@ fn streams<const CX: bool, const TB: bool, const L3: bool>(
 /// Fills `out` with the stream words of the chunk's words (`carrier.len()` of them, at most
 /// [`CHUNK_WORDS`]), each masked (AND) with its support mask for the 3-level carrier; the
 /// 2-level carrier's masks are all ones except at a span's edges, which the caller applies to
-/// the first and last word only.
+/// the first and last word only. Only the format's [`stream_count`] streams are written.
 #[inline(always)]
 pub(crate) fn prepare<const CX: bool, const TB: bool, const L3: bool>(
     planes: ChunkPlanes<'_>,
     carrier: &[CarrierWords],
     out: &mut StreamWords,
 ) {
-    let j_count = stream_count(CX, TB, L3);
     let [o0, o1, o2, o3, o4, o5, o6, o7] = out;
-    let outs = o0
-        .iter_mut()
-        .zip(o1.iter_mut())
-        .zip(o2.iter_mut())
-        .zip(o3.iter_mut())
-        .zip(o4.iter_mut())
-        .zip(o5.iter_mut())
-        .zip(o6.iter_mut())
-        .zip(o7.iter_mut());
+    // (one loop per stream count: a loop writes only the streams it has, so each keeps its
+    // few output pointers in registers)
+    match stream_count(CX, TB, L3) {
+        2 => prepare_n::<CX, TB, L3, 2>(planes, carrier, [o0, o1]),
+        4 => prepare_n::<CX, TB, L3, 4>(planes, carrier, [o0, o1, o2, o3]),
+        _ => prepare_n::<CX, TB, L3, 8>(planes, carrier, [o0, o1, o2, o3, o4, o5, o6, o7]),
+    }
+}
+
+/// [`prepare`] for `J` streams.
+#[inline(always)]
+fn prepare_n<const CX: bool, const TB: bool, const L3: bool, const J: usize>(
+    planes: ChunkPlanes<'_>,
+    carrier: &[CarrierWords],
+    mut outs: [&mut [u32; CHUNK_WORDS]; J],
+) {
     let inputs = carrier
         .iter()
         .zip(planes.a)
         .zip(planes.ma)
         .zip(planes.b)
         .zip(planes.mb);
-    for (slots, inputs) in outs.zip(inputs) {
-        let (((((((w0, w1), w2), w3), w4), w5), w6), w7) = slots;
+    for (w, inputs) in (0..CHUNK_WORDS).zip(inputs) {
         let ((((r, &a), &ma), &b), &mb) = inputs;
         let u = streams::<CX, TB, L3>(a, ma, b, mb, r);
-        let slots = [w0, w1, w2, w3, w4, w5, w6, w7];
-        for (j, (slot, x)) in (0..MAX_STREAMS).zip(slots.into_iter().zip(u)) {
-            if j < j_count {
-                let mask = if !L3 {
-                    u32::MAX
-                } else if stream_uses_s(CX, TB, L3, j) {
-                    r.nzs
-                } else {
-                    r.nzc
-                };
+        for (j, (out, x)) in (0..J).zip(outs.iter_mut().zip(u)) {
+            let mask = if !L3 {
+                u32::MAX
+            } else if stream_uses_s(CX, TB, L3, j) {
+                r.nzs
+            } else {
+                r.nzc
+            };
+            // (w < CHUNK_WORDS: always present)
+            if let Some(slot) = out.get_mut(w) {
                 *slot = x & mask;
             }
         }
