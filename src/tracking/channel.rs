@@ -139,6 +139,14 @@ struct CrossCorrelationWatch {
     explained: u8,
 }
 
+/// Lock windows after the hand-over in which every window is judged for cross-correlation
+/// (a channel handed a false detection tracks the cross-correlation from the start).
+const CROSS_CORRELATION_SETTLING_WINDOWS: u32 = 10;
+/// After settling, one lock window in this many is judged (the test costs about a million
+/// instructions per channel on a Cortex-M4F: judging every 100 ms window was a sixth of the
+/// whole receiver's time).
+const CROSS_CORRELATION_SETTLED_EVERY: u32 = 10;
+
 /// Doppler uncertainty of a tracking channel for the cross-correlation test, Hz.
 const TRACKING_DOPPLER_TOLERANCE_HZ: f32 = 25.0;
 
@@ -550,6 +558,19 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
         })
     }
 
+    /// Whether the lock window just completed is judged: every window while the channel
+    /// settles ([`CROSS_CORRELATION_SETTLING_WINDOWS`] after the hand-over, where a false
+    /// detection shows) or while windows in a row are explained, then every
+    /// [`CROSS_CORRELATION_SETTLED_EVERY`]th window, staggered by PRN so that channels started
+    /// together do not all run the test in the same millisecond.
+    fn cross_correlation_due(&self) -> bool {
+        let w = self.watch.windows;
+        let stagger = u32::from(self.prn().number());
+        w <= CROSS_CORRELATION_SETTLING_WINDOWS
+            || self.watch.explained > 0
+            || w.wrapping_add(stagger) % CROSS_CORRELATION_SETTLED_EVERY == 0
+    }
+
     /// Tests the channel's last lock window against the cross-correlation of the stronger
     /// `others` (the other channels' [`Channel::probe`]s on the same samples;
     /// [`crate::tracking::xcorr`]). Once
@@ -562,6 +583,9 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
             return None;
         }
         self.watch.judged = self.watch.windows;
+        if !self.cross_correlation_due() {
+            return None;
+        }
         let epoch_s = 1e-3 * f32::from(self.config.lock_window);
         let test = CrossCorrelationTest {
             epoch_aligned: true,
