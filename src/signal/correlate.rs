@@ -100,6 +100,14 @@ pub trait Correlate<const A: usize>: Clone + core::fmt::Debug {
     /// Non-finite, or more than 1 % off the nominal chip rate.
     fn set_code_rate(&mut self, chips_per_second: f64) -> Result<(), Self::Error>;
 
+    /// Sets both NCO steps from their words (from an [`NcoSteering`](super::nco::NcoSteering)):
+    /// the tracking loops' setter, integer only.
+    ///
+    /// # Errors
+    /// A code step the correlator cannot run (below [`MIN_CODE_STEP`](super::nco::MIN_CODE_STEP),
+    /// or beyond the bit-parallel code table's reach); the correlator is then unchanged.
+    fn set_nco_steps(&mut self, carrier_step: u32, code_step: u64) -> Result<(), Self::Error>;
+
     /// Sets the prompt code phase, chips (modulo 1023), discarding the integration in
     /// progress.
     ///
@@ -214,6 +222,10 @@ impl<const A: usize> Correlate<A> for Correlator<A> {
         Self::set_code_rate(self, chips_per_second)
     }
 
+    fn set_nco_steps(&mut self, carrier_step: u32, code_step: u64) -> Result<(), SignalError> {
+        Self::set_nco_steps(self, carrier_step, code_step)
+    }
+
     fn set_code_phase(&mut self, chips: f64) -> Result<(), SignalError> {
         Self::set_code_phase(self, chips)
     }
@@ -302,6 +314,14 @@ impl<const A: usize> Correlate<A> for BitCorrelator<A> {
 
     fn set_code_rate(&mut self, chips_per_second: f64) -> Result<(), BitCorrelatorError> {
         Self::set_code_rate(self, chips_per_second)
+    }
+
+    fn set_nco_steps(
+        &mut self,
+        carrier_step: u32,
+        code_step: u64,
+    ) -> Result<(), BitCorrelatorError> {
+        Self::set_nco_steps(self, carrier_step, code_step)
     }
 
     fn set_code_phase(&mut self, chips: f64) -> Result<(), BitCorrelatorError> {

@@ -320,11 +320,25 @@ impl<const A: usize> Correlator<A> {
         if !((chips_per_second / CA_CHIP_RATE_HZ - 1.0).abs() <= 0.01) {
             return Err(SignalError::InvalidConfig);
         }
-        let step = CodeNco::step_for(chips_per_second, self.sample_rate_hz);
-        if CODE_WRAP.div_ceil(step.max(1)) + 1 > MAX_SAMPLES_PER_EPOCH {
+        self.set_nco_steps(
+            self.carrier.step,
+            CodeNco::step_for(chips_per_second, self.sample_rate_hz),
+        )
+    }
+
+    /// Sets both NCO steps from their words (an [`NcoSteering`](super::nco::NcoSteering)'s):
+    /// integer only, for the tracking loops.
+    ///
+    /// # Errors
+    /// [`SignalError::InvalidConfig`] for a code step below
+    /// [`MIN_CODE_STEP`](super::nco::MIN_CODE_STEP) (a period over
+    /// [`MAX_SAMPLES_PER_EPOCH`] samples); the correlator is then unchanged.
+    pub fn set_nco_steps(&mut self, carrier_step: u32, code_step: u64) -> Result<(), SignalError> {
+        if code_step < super::nco::MIN_CODE_STEP {
             return Err(SignalError::InvalidConfig);
         }
-        self.code.step = step;
+        self.carrier.step = carrier_step;
+        self.code.step = code_step;
         Ok(())
     }
 

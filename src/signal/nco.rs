@@ -174,3 +174,208 @@ impl CodeNco {
         remaining.div_ceil(self.step).max(1)
     }
 }
+
+/// The largest Doppler [`NcoSteering::carrier_step`] accepts, Hz (2¹⁹: ten times a LEO's).
+pub const MAX_STEERED_DOPPLER_HZ: f32 = 524_288.0;
+
+/// The smallest code step a correlator accepts: one code period in at most
+/// `MAX_SAMPLES_PER_EPOCH − 1` samples.
+pub const MIN_CODE_STEP: u64 =
+    CODE_WRAP.div_ceil(crate::signal::correlator::MAX_SAMPLES_PER_EPOCH - 1);
+
+/// The NCO words for the tracking loops' f32 outputs, in integer arithmetic: what a channel
+/// computes every code period (the 1 ms path has no f64, which is soft float on the M4F, and no
+/// division). The constants are computed once, in f64, from the sample rate and the IF.
+///
+/// Against [`CarrierNco::step_for`] / [`CodeNco::step_for`] on the same f32 inputs the words
+/// differ by at most one unit (a carrier step of 2⁻³² cycle per sample, 0.6 mHz at 2.6 Msps;
+/// a code step of 2⁻³² chip per sample) at 2.1 Msps and above: the Doppler is rounded to
+/// 2⁻¹¹ Hz and the code-rate offset to 2⁻¹⁶ chip/s before the fixed-point products (below
+/// 2.1 Msps the Doppler's rounding, at most 0.25 mHz, can add a unit).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NcoSteering {
+    /// Carrier word of the intermediate frequency.
+    if_step: u32,
+    /// Carrier word per Hz, 2⁻²¹ units: `round(2⁵³ / f_s)`.
+    carrier_per_hz_q21: i64,
+    /// Hz per carrier-word unit, `f_s / 2³²`.
+    hz_per_carrier_unit: f32,
+    /// Intermediate frequency, Hz.
+    if_hz: f32,
+    /// Half the sample rate, Hz.
+    nyquist_hz: f32,
+    /// Code word of the nominal chip rate.
+    nominal_code_step: u64,
+    /// Code word per chip/s, 2⁻¹⁶ units: `round(2⁴⁸ / f_s)`.
+    code_per_chip_rate_q16: i64,
+}
+
+/// A steering setting [`NcoSteering`] refuses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SteeringError {
+    /// A non-finite input.
+    NonFinite,
+    /// A sample rate or IF that gives no steering (rate not positive, `|IF| ≥ f_s/2`).
+    InvalidConfig,
+    /// A carrier beyond Nyquist or a Doppler beyond [`MAX_STEERED_DOPPLER_HZ`].
+    CarrierOutOfRange,
+    /// A code rate more than 1 % off nominal, or one period longer than a correlator holds.
+    CodeRateOutOfRange,
+}
+
+impl NcoSteering {
+    /// The steering for samples at `sample_rate_hz` with the intermediate frequency
+    /// `intermediate_frequency_hz` (f64, once).
+    ///
+    /// # Errors
+    /// [`SteeringError::NonFinite`], or [`SteeringError::InvalidConfig`] for a sample rate
+    /// not in 100 kHz–100 MHz or an IF at or beyond Nyquist.
+    pub fn new(sample_rate_hz: f64, intermediate_frequency_hz: f64) -> Result<Self, SteeringError> {
+        if !(sample_rate_hz.is_finite() && intermediate_frequency_hz.is_finite()) {
+            return Err(SteeringError::NonFinite);
+        }
+        if !((1e5..=1e8).contains(&sample_rate_hz)
+            && intermediate_frequency_hz.abs() < 0.5 * sample_rate_hz)
+        {
+            return Err(SteeringError::InvalidConfig);
+        }
+        let two32 = 4_294_967_296.0;
+        Ok(Self {
+            if_step: CarrierNco::step_for(intermediate_frequency_hz, sample_rate_hz),
+            carrier_per_hz_q21: libm::round(two32 * 2_097_152.0 / sample_rate_hz) as i64,
+            hz_per_carrier_unit: (sample_rate_hz / two32) as f32,
+            if_hz: intermediate_frequency_hz as f32,
+            nyquist_hz: (0.5 * sample_rate_hz) as f32,
+            nominal_code_step: CodeNco::step_for(super::CA_CHIP_RATE_HZ, sample_rate_hz),
+            code_per_chip_rate_q16: libm::round(two32 * 65_536.0 / sample_rate_hz) as i64,
+        })
+    }
+
+    /// The carrier word for IF + `doppler_hz`.
+    ///
+    /// # Errors
+    /// [`SteeringError::NonFinite`]; [`SteeringError::CarrierOutOfRange`] for
+    /// `|doppler| > MAX_STEERED_DOPPLER_HZ` or `|IF + doppler| ≥ f_s/2`.
+    pub fn carrier_step(&self, doppler_hz: f32) -> Result<u32, SteeringError> {
+        if !doppler_hz.is_finite() {
+            return Err(SteeringError::NonFinite);
+        }
+        if !(doppler_hz.abs() <= MAX_STEERED_DOPPLER_HZ
+            && (self.if_hz + doppler_hz).abs() < self.nyquist_hz)
+        {
+            return Err(SteeringError::CarrierOutOfRange);
+        }
+        // |q| ≤ 2³⁰; |q · K| < 2⁶³ since K = 2⁵³/f_s and |q| ≤ 2¹¹ · f_s/2.
+        let q = i64::from(libm::roundf(doppler_hz * 2048.0) as i32);
+        let delta = q
+            .wrapping_mul(self.carrier_per_hz_q21)
+            .wrapping_add(1 << 31)
+            >> 32;
+        Ok(self.if_step.wrapping_add(delta as u32))
+    }
+
+    /// The Doppler a carrier word steers to (carrier frequency − IF), Hz, f32 (rounded to
+    /// f32's 24 bits: 4 mHz at 50 kHz).
+    pub fn doppler_hz(&self, carrier_step: u32) -> f32 {
+        carrier_step.wrapping_sub(self.if_step) as i32 as f32 * self.hz_per_carrier_unit
+    }
+
+    /// The code word for the nominal chip rate + `offset_chips_per_second`.
+    ///
+    /// # Errors
+    /// [`SteeringError::NonFinite`]; [`SteeringError::CodeRateOutOfRange`] for an offset of
+    /// more than 1 % of the chip rate or a period longer than [`MIN_CODE_STEP`] allows.
+    pub fn code_step(&self, offset_chips_per_second: f32) -> Result<u64, SteeringError> {
+        if !offset_chips_per_second.is_finite() {
+            return Err(SteeringError::NonFinite);
+        }
+        if !(offset_chips_per_second.abs() <= 0.01 * super::CA_CHIP_RATE_HZ as f32) {
+            return Err(SteeringError::CodeRateOutOfRange);
+        }
+        // |q| ≤ 10 230 · 2¹⁶ < 2³⁰, K < 2³²: the product fits.
+        let q = i64::from(libm::roundf(offset_chips_per_second * 65_536.0) as i32);
+        let delta = q
+            .wrapping_mul(self.code_per_chip_rate_q16)
+            .wrapping_add(1 << 31)
+            >> 32;
+        let step = self.nominal_code_step.wrapping_add_signed(delta);
+        if step < MIN_CODE_STEP {
+            return Err(SteeringError::CodeRateOutOfRange);
+        }
+        Ok(step)
+    }
+}
+
+#[cfg(test)]
+mod steering_tests {
+    use super::*;
+    use crate::signal::{CA_CHIP_RATE_HZ, GPS_L1_HZ};
+
+    /// Random f32 in `[−1, 1)` from a xorshift.
+    fn uniform(state: &mut u64) -> f32 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        ((*state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn the_integer_words_are_within_one_unit_of_the_f64_ones() {
+        for (fs, f_if) in [
+            (2.6e6, 0.0),
+            (4.092e6, 1.023e6),
+            (16.368e6, -4.092e6),
+            (1.2e6, 1e3),
+        ] {
+            let s = NcoSteering::new(fs, f_if).unwrap();
+            let mut state = 0x9e37_79b9_7f4a_7c15u64;
+            for _ in 0..20_000 {
+                let doppler = 50_000.0 * uniform(&mut state);
+                let dll = 2.0 * uniform(&mut state);
+                let carrier = s.carrier_step(doppler).unwrap();
+                let exact = CarrierNco::step_for(f_if + f64::from(doppler), fs);
+                // One unit, plus the Doppler's rounding (2⁻¹² Hz) below 2.1 Msps.
+                let tolerance = 1 + libm::ceil(1_048_576.0 / fs) as i32;
+                let diff = (carrier.wrapping_sub(exact) as i32).abs();
+                assert!(diff <= tolerance, "carrier {doppler} Hz at {fs}: {diff}");
+                let offset = doppler / 1540.0 + dll;
+                let code = s.code_step(offset).unwrap();
+                let rate =
+                    CA_CHIP_RATE_HZ * (1.0 + f64::from(doppler) / GPS_L1_HZ) + f64::from(dll);
+                let exact = CodeNco::step_for(rate, fs);
+                assert!(code.abs_diff(exact) <= 1, "code {offset} chip/s at {fs}");
+                let back = s.doppler_hz(carrier);
+                // The word's rounding, then f32's 24 bits.
+                let unit = (fs / 4_294_967_296.0) as f32;
+                assert!(
+                    (back - doppler).abs() <= tolerance as f32 * unit + 2e-7 * doppler.abs(),
+                    "{back} vs {doppler} at {fs}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn out_of_range_and_non_finite_settings_are_refused() {
+        let s = NcoSteering::new(2.6e6, 0.0).unwrap();
+        assert_eq!(s.carrier_step(f32::NAN), Err(SteeringError::NonFinite));
+        assert_eq!(s.carrier_step(1.3e6), Err(SteeringError::CarrierOutOfRange));
+        assert_eq!(s.carrier_step(-6e5), Err(SteeringError::CarrierOutOfRange));
+        assert_eq!(s.code_step(f32::INFINITY), Err(SteeringError::NonFinite));
+        assert_eq!(
+            s.code_step(10_300.0),
+            Err(SteeringError::CodeRateOutOfRange)
+        );
+        assert!(s.code_step(10_000.0).is_ok());
+        assert_eq!(
+            NcoSteering::new(2.6e6, 1.3e6),
+            Err(SteeringError::InvalidConfig)
+        );
+        assert_eq!(
+            NcoSteering::new(f64::NAN, 0.0),
+            Err(SteeringError::NonFinite)
+        );
+    }
+}

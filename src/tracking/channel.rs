@@ -49,6 +49,7 @@ use crate::error::{Error, ErrorKind};
 use crate::signal::bitwise::BitCorrelatorError;
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::correlator::{Correlator, EpochCorrelations, Iq, Taps};
+use crate::signal::nco::{NcoSteering, SteeringError};
 use crate::signal::SignalError;
 use crate::signal::{Correlate, CorrelationBlock};
 
@@ -181,6 +182,19 @@ pub struct Channel<const A: usize, C = Correlator<A>> {
     /// The blocks carry complex samples.
     complex: bool,
     watch: CrossCorrelationWatch,
+    /// The 1 ms path's constants, f32 and integer (f64 is soft float on the M4F).
+    rates: Rates,
+}
+
+/// What the loops need of the sample rate every period, computed once.
+#[derive(Clone, Copy, Debug)]
+struct Rates {
+    /// Loop outputs → NCO words.
+    steering: NcoSteering,
+    /// Sample rate, Hz.
+    sample_rate_hz: f32,
+    /// The early/late offset, chips (the correlator's whole samples at the nominal rate).
+    early_late_offset_chips: f32,
 }
 
 /// The discriminator outputs of one epoch (reference antenna).
@@ -221,6 +235,17 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
     ) -> Result<Self, TrackingError> {
         config.validate()?;
         let correlator = C::new(prn, &config.correlator(), settings).map_err(Into::into)?;
+        let steering = NcoSteering::new(config.sample_rate_hz, config.intermediate_frequency_hz)
+            .map_err(|e| match e {
+                SteeringError::NonFinite => TrackingError::NonFinite,
+                _ => TrackingError::InvalidConfig,
+            })?;
+        let rates = Rates {
+            steering,
+            sample_rate_hz: config.sample_rate_hz as f32,
+            early_late_offset_chips: correlator.early_late_offset_samples() as f32
+                * (CA_CHIP_RATE_HZ / config.sample_rate_hz) as f32,
+        };
         Ok(Self {
             config: *config,
             correlator,
@@ -240,6 +265,7 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
             next_sample: 0,
             complex: true,
             watch: CrossCorrelationWatch::default(),
+            rates,
         })
     }
 
@@ -370,7 +396,7 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
     /// discriminators, the loop filters steering the NCOs, the lock and C/N0 windows, the
     /// state, the data bit.
     fn close_loops(&mut self, c: EpochCorrelations<A>) -> TrackingEpoch<A> {
-        let t = c.samples as f32 / self.config.sample_rate_hz as f32;
+        let t = c.samples as f32 / self.rates.sample_rate_hz;
         let doppler_now = self.carrier_frequency_hz();
         let reference = c.taps.first().copied().unwrap_or_default();
         let p = reference.prompt;
@@ -405,8 +431,7 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
     /// Costas, FLL and DLL discriminators of the reference antenna's taps.
     fn discriminators(&self, reference: &Taps, t: f32) -> Discriminators {
         let p = reference.prompt;
-        let offset = self.correlator.early_late_offset_samples() as f32
-            * (CA_CHIP_RATE_HZ / self.config.sample_rate_hz) as f32;
+        let offset = self.rates.early_late_offset_chips;
         Discriminators {
             phase: costas_cycles(&p),
             frequency: self
@@ -431,12 +456,17 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
             self.carrier
                 .update(d.phase, d.frequency, t, cfg.pll_bandwidth_hz, fll_bw)
         };
-        let code_rate = CA_CHIP_RATE_HZ * (1.0 + f64::from(doppler) / GPS_L1_HZ)
-            + f64::from(dll_correction(d.code, dll_bw));
-        self.correlator
-            .set_carrier_frequency(cfg.intermediate_frequency_hz + f64::from(doppler))
-            .and_then(|()| self.correlator.set_code_rate(code_rate))
-            .is_ok()
+        // Code Doppler (the carrier's over L1/chip-rate = 1540) plus the DLL's correction.
+        let code_rate_offset =
+            doppler * (CA_CHIP_RATE_HZ / GPS_L1_HZ) as f32 + dll_correction(d.code, dll_bw);
+        let steering = &self.rates.steering;
+        match (
+            steering.carrier_step(doppler),
+            steering.code_step(code_rate_offset),
+        ) {
+            (Ok(carrier), Ok(code)) => self.correlator.set_nco_steps(carrier, code).is_ok(),
+            _ => false,
+        }
     }
 
     /// One epoch of the refinement stage: stores the prompt's square; at the last one, the
@@ -521,11 +551,9 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
     /// The replica's current Doppler (carrier NCO frequency minus IF), Hz.
     #[allow(clippy::misnamed_getters)]
     pub fn carrier_frequency_hz(&self) -> f32 {
-        (self
-            .correlator
-            .carrier()
-            .frequency_hz(self.config.sample_rate_hz)
-            - self.config.intermediate_frequency_hz) as f32
+        self.rates
+            .steering
+            .doppler_hz(self.correlator.carrier().step)
     }
 
     /// The channel as the cross-correlation test sees it: code phase and rate at the next

@@ -16,7 +16,6 @@ use super::planes::{PlaneFormat, WORD_SAMPLES};
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, QUIET_OFFSET_CHIPS};
 use crate::signal::correlator::{
     CorrelatorConfig, EpochCorrelations, Iq, SlaveTaps, Taps, MAX_EARLY_LATE_OFFSET,
-    MAX_SAMPLES_PER_EPOCH,
 };
 use crate::signal::nco::{CarrierNco, CodeNco, CODE_WRAP};
 use crate::signal::SignalError;
@@ -277,12 +276,30 @@ impl<const A: usize> BitCorrelator<A> {
         if !((chips_per_second / CA_CHIP_RATE_HZ - 1.0).abs() <= 0.01) {
             return Err(BitCorrelatorError::InvalidConfig);
         }
-        let step = CodeNco::step_for(chips_per_second, self.sample_rate_hz);
-        code::step_supported(step)?;
-        if CODE_WRAP.div_ceil(step) + 1 > MAX_SAMPLES_PER_EPOCH {
+        self.set_nco_steps(
+            self.carrier.step,
+            CodeNco::step_for(chips_per_second, self.sample_rate_hz),
+        )
+    }
+
+    /// Sets both NCO steps from their words (an [`NcoSteering`](crate::signal::nco::NcoSteering)'s):
+    /// integer only, for the tracking loops.
+    ///
+    /// # Errors
+    /// [`BitCorrelatorError::InvalidConfig`] for a code step below
+    /// [`MIN_CODE_STEP`](crate::signal::nco::MIN_CODE_STEP) or beyond the code table's reach
+    /// (4/7 chip per sample); the correlator is then unchanged.
+    pub fn set_nco_steps(
+        &mut self,
+        carrier_step: u32,
+        code_step: u64,
+    ) -> Result<(), BitCorrelatorError> {
+        code::step_supported(code_step)?;
+        if code_step < crate::signal::nco::MIN_CODE_STEP {
             return Err(BitCorrelatorError::InvalidConfig);
         }
-        self.code.step = step;
+        self.carrier.step = carrier_step;
+        self.code.step = code_step;
         Ok(())
     }
 
