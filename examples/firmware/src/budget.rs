@@ -94,25 +94,14 @@ fn call<R>(f: impl FnOnce() -> R) -> R {
 }
 
 /// Runs `f` once between the instruction-count markers and reports its stack use (including
-/// the few bytes of the `call` trampoline frame).
+/// the few bytes of the `call` trampoline frame): [`measure_named`] with a plain name.
 #[inline(never)]
 pub fn measure<R>(name: &str, f: impl FnOnce() -> R) -> R {
-    let n = REGION.fetch_add(1, Ordering::Relaxed);
-    paint_free_stack();
-    let sp = cortex_m::register::msp::read() as usize;
-    // SAFETY: the markers are register-to-self moves with no effect on program state.
-    unsafe { core::arch::asm!("mov r8, r8") };
-    let out = call(f);
-    // The stop marker right after the return (QEMU 7.2's plugin missed a stop marker that
-    // followed the result's store in one layout, shifting every later region by one).
-    unsafe { core::arch::asm!("mov r9, r9") };
-    let out = black_box(out);
-    let used = stack_used_below(sp);
-    hprintln!("budget region {}: {}, stack {} B", n, name, used);
-    out
+    measure_named(format_args!("{}", name), f)
 }
 
-/// [`measure`] with a formatted name.
+/// Runs `f` once between the instruction-count markers (only `f` is counted: the name is
+/// formatted after the stop marker) and reports its stack use.
 #[inline(never)]
 pub fn measure_named<R>(name: core::fmt::Arguments<'_>, f: impl FnOnce() -> R) -> R {
     let n = REGION.fetch_add(1, Ordering::Relaxed);
@@ -121,6 +110,9 @@ pub fn measure_named<R>(name: core::fmt::Arguments<'_>, f: impl FnOnce() -> R) -
     // SAFETY: the markers are register-to-self moves with no effect on program state.
     unsafe { core::arch::asm!("mov r8, r8") };
     let out = call(f);
+    // The stop marker right after the return (QEMU 7.2's plugin missed a stop marker that
+    // followed the result's store in one layout, shifting every later region by one).
+    // SAFETY: as the start marker.
     unsafe { core::arch::asm!("mov r9, r9") };
     let out = black_box(out);
     let used = stack_used_below(sp);
