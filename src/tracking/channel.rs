@@ -188,6 +188,7 @@ pub struct Channel<const A: usize, C = Correlator<A>> {
 
 /// What the loops need of the sample rate every period, computed once.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 struct Rates {
     /// Loop outputs → NCO words.
     steering: NcoSteering,
