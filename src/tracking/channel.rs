@@ -457,7 +457,7 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
             self.carrier
                 .update(d.phase, d.frequency, t, cfg.pll_bandwidth_hz, fll_bw)
         };
-        // Code Doppler (the carrier's over L1/chip-rate = 1540) plus the DLL's correction.
+        // Code Doppler (the carrier Doppler over f_L1 / f_chip = 1540) plus the DLL correction.
         let code_rate_offset =
             doppler * (CA_CHIP_RATE_HZ / GPS_L1_HZ) as f32 + dll_correction(d.code, dll_bw);
         let steering = &self.rates.steering;
