@@ -1,7 +1,9 @@
 //! A fixed-size in-place complex FFT in f32 (for acquisition), no allocation.
 //!
-//! `N` is a power of two (checked by [`Fft::new`]); the twiddle table `e^{−j2πk/N}` is built
-//! once with libm, and no butterfly computes a trigonometric function. The transform is a
+//! `N` is a power of two (checked by [`Fft::new`]); the twiddles are built once with libm, in
+//! the order the stages read them (each stage's `(w, w², w³)` triples side by side, all the
+//! stages' triples within `N` entries), so that a butterfly reads one stream of twiddles and
+//! none computes a trigonometric function. The transform is a
 //! decimation-in-time radix-4 FFT on the bit-reversed input (one radix-2 stage first when
 //! `log₂ N` is odd): `⌈log₂ N / 2⌉` stages of `N/4` butterflies of three complex
 //! multiplications, against `log₂ N` stages of `N/2` multiplications for radix 2 (on the
@@ -11,11 +13,24 @@
 /// A complex number as `[re, im]`.
 pub type Complex = [f32; 2];
 
-/// Twiddles and the bit-reversal permutation of an `N`-point FFT.
+/// The twiddles of an `N`-point FFT, in stage order.
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Fft<const N: usize> {
+    /// Stage after stage (the radix-4 stages with twiddles, `quarter` = 4, 16, … or 2, 8, …
+    /// up to `N/4`), for `k < quarter`: `w^k, w^{2k}, w^{3k}`, `w = e^{−j2π/(4·quarter)}`.
+    /// `3 · Σ quarter < N` entries are used; the rest stay zero.
     twiddles: [Complex; N],
+}
+
+/// `quarter` of the first radix-4 stage that multiplies by twiddles: the one after the
+/// first radix-4 stage (twiddles all 1) for even `log₂ N`, after the radix-2 stage for odd.
+const fn first_quarter(n: usize) -> usize {
+    if n.trailing_zeros() % 2 == 1 {
+        2
+    } else {
+        4
+    }
 }
 
 /// `a · b`.
@@ -27,15 +42,43 @@ fn mul(a: Complex, b: Complex) -> Complex {
 impl<const N: usize> Fft<N> {
     /// `None` unless `N` is a power of two ≥ 4.
     pub fn new() -> Option<Self> {
+        let mut fft = Self::blank();
+        fft.build().then_some(fft)
+    }
+
+    /// A transform without its twiddles (all zero: it maps every input to zero until
+    /// [`Fft::build`]). `const`, so that the table that holds it is built in place, without a
+    /// copy of its `8·N` bytes on the stack.
+    pub const fn blank() -> Self {
+        Self {
+            twiddles: [[0.0; 2]; N],
+        }
+    }
+
+    /// Builds the twiddles in place; `false` (and nothing built) unless `N` is a power of
+    /// two ≥ 4.
+    pub fn build(&mut self) -> bool {
         if N < 4 || !N.is_power_of_two() {
-            return None;
+            return false;
         }
-        let mut twiddles = [[0.0; 2]; N];
-        for (k, w) in twiddles.iter_mut().enumerate() {
-            let a = -2.0 * core::f64::consts::PI * k as f64 / N as f64;
-            *w = [libm::cos(a) as f32, libm::sin(a) as f32];
+        let twiddles = &mut self.twiddles;
+        let mut at = 0;
+        let mut quarter = first_quarter(N);
+        // (at most log₄ N stages)
+        while quarter < N {
+            let len = 4 * quarter;
+            for k in 0..quarter {
+                for r in 1..=3 {
+                    let a = -2.0 * core::f64::consts::PI * (r * k) as f64 / len as f64;
+                    if let Some(w) = twiddles.get_mut(at) {
+                        *w = [libm::cos(a) as f32, libm::sin(a) as f32];
+                    }
+                    at += 1;
+                }
+            }
+            quarter = len;
         }
-        Some(Self { twiddles })
+        true
     }
 
     /// In-place forward transform `X[k] = Σ x[n] e^{−j2πkn/N}`; `inverse` uses `e^{+j…}`
@@ -88,36 +131,40 @@ impl<const N: usize> Fft<N> {
             len = 4;
         }
         // (at most log₄ N stages: len grows fourfold up to N)
+        let mut at = 0usize;
         while len < N {
             let quarter = len;
             len = len.saturating_mul(4);
-            self.radix4_stage(x, quarter, N / len.max(1));
+            let triples = quarter.saturating_mul(3);
+            let twiddles = self
+                .twiddles
+                .get(at..at.saturating_add(triples))
+                .unwrap_or(&[]);
+            Self::radix4_stage(x, quarter, twiddles);
+            at = at.saturating_add(triples);
         }
     }
 
     /// One radix-4 stage: every block of `4 · quarter` points holds (bit-reversed) the
     /// transforms of its samples `≡ 0, 2, 1, 3 (mod 4)`, `quarter` points each; they are
-    /// combined with the twiddles `w^r`, `w = e^{−j2πk/(4·quarter)}` = table entry
-    /// `k · stride`.
-    fn radix4_stage(&self, x: &mut [Complex; N], quarter: usize, stride: usize) {
-        // (quarter ≤ N/4 and stride ≤ N/4: the products stay below N)
+    /// combined with the stage's twiddle triples `(w^k, w^{2k}, w^{3k})`,
+    /// `w = e^{−j2π/(4·quarter)}`, `k < quarter`.
+    fn radix4_stage(x: &mut [Complex; N], quarter: usize, twiddles: &[Complex]) {
         for block in x.chunks_exact_mut(quarter.saturating_mul(4)) {
             let (ab, cd) = block.split_at_mut(quarter.saturating_mul(2));
             let (a, b) = ab.split_at_mut(quarter);
             let (c, d) = cd.split_at_mut(quarter);
-            let w1 = self.twiddles.iter().step_by(stride);
-            let w2 = self.twiddles.iter().step_by(stride.saturating_mul(2));
-            let w3 = self.twiddles.iter().step_by(stride.saturating_mul(3));
             let points = a
                 .iter_mut()
                 .zip(b.iter_mut())
                 .zip(c.iter_mut().zip(d.iter_mut()));
-            for (((a, b), (c, d)), ((w1, w2), w3)) in points.zip(w1.zip(w2).zip(w3)) {
+            for (((a, b), (c, d)), w) in points.zip(twiddles.chunks_exact(3)) {
+                let &[w1, w2, w3] = w else { continue };
                 // residues 0, 2, 1, 3 live in a, b, c, d
                 let t0 = *a;
-                let t2 = mul(*b, *w2);
-                let t1 = mul(*c, *w1);
-                let t3 = mul(*d, *w3);
+                let t2 = mul(*b, w2);
+                let t1 = mul(*c, w1);
+                let t3 = mul(*d, w3);
                 let s02 = [t0[0] + t2[0], t0[1] + t2[1]];
                 let d02 = [t0[0] - t2[0], t0[1] - t2[1]];
                 let s13 = [t1[0] + t3[0], t1[1] + t3[1]];

@@ -592,12 +592,13 @@ fn tracking_budgets() {
 #[inline(never)]
 fn acquisition_budget() {
     let s = &SIGNAL_SAMPLES;
-    // (the engine bound directly, not through a tuple: one copy of it on the stack, not two)
-    let mut engine = Acquisition::<1024>::new();
-    let Ok(acq) = engine.as_mut() else {
+    // (made blank where it stays and built there: one copy of it on the stack)
+    let mut engine = Acquisition::<1024>::blank();
+    if engine.build().is_err() {
         hprintln!("budget acquisition: engine refused");
         return;
-    };
+    }
+    let acq = &mut engine;
     let Some(prn) = Prn::new(5) else { return };
     let cfg = AcquisitionConfig {
         sample_rate_hz: SIGNAL_SELF_TEST_RATE_HZ,
@@ -622,17 +623,18 @@ pub const SHARED_LANES: usize = 4;
 /// (1 chunk), ±1 kHz (5 bins, 2 chunks), ±1.5 kHz (7 bins, 2 chunks) over 1 ms, ±1.5 kHz
 /// over 2 ms, and the threshold for K = 1, 2, 6 and 8 over a cold grid's cells. `.ci/run`
 /// solves these for the per-search, per-chunk·ms, per-bin·ms and per-bin costs. Its own
-/// frame: the engine (54 KiB with 4 lanes; `new` leaves two copies of it in this frame) is the
-/// largest object of the self-check.
+/// frame: the engine (54 KiB with 4 lanes, made with `blank` and built in place: `new`, by
+/// value, left copies of it in this frame) is the largest object of the self-check.
 #[inline(never)]
 fn shared_acquisition_budget() {
     let s = &SIGNAL_SAMPLES;
-    // (bound by reference into the Result: one copy of the engine on the stack, not two)
-    let mut engine = Acquisition::<1024, SHARED_LANES>::new();
-    let Ok(acq) = engine.as_mut() else {
+    // (made blank where it stays and built there: one copy of the engine on the stack)
+    let mut engine = Acquisition::<1024, SHARED_LANES>::blank();
+    if engine.build().is_err() {
         hprintln!("budget shared acquisition: engine refused");
         return;
-    };
+    }
+    let acq = &mut engine;
     let Some(prn) = Prn::new(5) else { return };
     // 2 ms of noise: the flash's millisecond twice over.
     let (mut i, mut q) = ([0i8; 2 * SIGNAL_SELF_TEST_LEN], [0i8; 2 * SIGNAL_SELF_TEST_LEN]);

@@ -58,17 +58,20 @@ pub(super) struct Cancelled {
 
 impl Default for Cancelled {
     fn default() -> Self {
-        Self {
-            prn: Prn::FIRST,
-            carrier_step: 0,
-            chips: 0.0,
-            chips_per_sample: 0.0,
-            code_step: 0,
-        }
+        Self::NONE
     }
 }
 
 impl Cancelled {
+    /// No signal (the engine's empty slots).
+    pub(super) const NONE: Self = Self {
+        prn: Prn::FIRST,
+        carrier_step: 0,
+        chips: 0.0,
+        chips_per_sample: 0.0,
+        code_step: 0,
+    };
+
     /// The signal at code phase `chips` (at sample 0) and Doppler `doppler_hz`.
     fn new(prn: Prn, chips: f64, doppler_hz: f64, config: &AcquisitionConfig) -> Self {
         let fs = config.sample_rate_hz;

@@ -94,6 +94,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         config: &AcquisitionConfig,
         keep_fraction: f32,
     ) -> Result<CancellationCheck, AcquisitionError> {
+        self.check_built()?;
         check_inputs(i, q, config)?;
         let victim = KnownSignal::from(candidate);
         check_known(known)?;
@@ -138,6 +139,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         config: &AcquisitionConfig,
         margin: f32,
     ) -> Result<CrossCheck, AcquisitionError> {
+        self.check_built()?;
         check_inputs(i, q, config)?;
         let finite = |d: f32, c: f64| d.is_finite() && c.is_finite();
         if !margin.is_finite()

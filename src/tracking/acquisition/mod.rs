@@ -260,6 +260,8 @@ pub const DEFAULT_LANES: usize = 1;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Acquisition<const N: usize, const L: usize = DEFAULT_LANES> {
     fft: Fft<N>,
+    /// The FFT's tables are built ([`Acquisition::build`]).
+    built: bool,
     code: [Complex; N],
     data: [Complex; N],
     /// The spectrum product of one bin, then its correlation.
@@ -287,12 +289,20 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192 and `L`
     /// in 1–64.
     pub fn new() -> Result<Self, AcquisitionError> {
-        if !(1024..=8192).contains(&N) || !(1..=64).contains(&L) {
-            return Err(AcquisitionError::InvalidConfig);
-        }
-        let fft = Fft::new().ok_or(AcquisitionError::InvalidConfig)?;
-        Ok(Self {
-            fft,
+        let mut engine = Self::blank();
+        engine.build()?;
+        Ok(engine)
+    }
+
+    /// An engine whose FFT tables are not built yet: every search returns
+    /// [`AcquisitionError::NotBuilt`] until [`Acquisition::build`]. `const` and all zeros, so
+    /// that it is made where it stays (a `static`, or a local that is never moved) and built
+    /// there: [`Acquisition::new`] returns the engine by value, which can leave copies of its
+    /// `(34 + 4·L)·N` bytes in the caller's frame on a microcontroller's stack.
+    pub const fn blank() -> Self {
+        Self {
+            fft: Fft::blank(),
+            built: false,
             code: [[0.0; 2]; N],
             data: [[0.0; 2]; N],
             work: [[0.0; 2]; N],
@@ -300,11 +310,34 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             thresholds: [(0, 0.0, 0.0, 0.0); 2],
             peaks: [(0.0, 0); MAX_DOPPLER_BINS],
             level: 0.0,
-            tones: [tone::Tone::default(); tone::MAX_TONES],
+            tones: [tone::Tone::NONE; tone::MAX_TONES],
             tone_count: 0,
-            cancelled: [cancel::Cancelled::default(); MAX_CANCELLED],
+            cancelled: [cancel::Cancelled::NONE; MAX_CANCELLED],
             cancelled_count: 0,
-        })
+        }
+    }
+
+    /// Builds the engine's FFT tables in place (a [`Acquisition::blank`] engine; building
+    /// again changes nothing).
+    ///
+    /// # Errors
+    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192 and `L`
+    /// in 1–64 (the engine stays unbuilt).
+    pub fn build(&mut self) -> Result<(), AcquisitionError> {
+        if !(1024..=8192).contains(&N) || !(1..=64).contains(&L) || !self.fft.build() {
+            return Err(AcquisitionError::InvalidConfig);
+        }
+        self.built = true;
+        Ok(())
+    }
+
+    /// [`AcquisitionError::NotBuilt`] for a blank engine.
+    fn check_built(&self) -> Result<(), AcquisitionError> {
+        if self.built {
+            Ok(())
+        } else {
+            Err(AcquisitionError::NotBuilt)
+        }
     }
 
     /// Searches `prn` in the reference antenna's samples (`q = None` for real samples) and
@@ -319,7 +352,8 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// [`AcquisitionError::NotEnoughSamples`] (fewer than
     /// [`AcquisitionConfig::search_samples`]; between that and
     /// [`AcquisitionConfig::samples_needed`] nothing is detected),
-    /// [`AcquisitionError::LengthMismatch`] (`q` shorter than `i`).
+    /// [`AcquisitionError::LengthMismatch`] (`q` shorter than `i`),
+    /// [`AcquisitionError::NotBuilt`] (a [`Acquisition::blank`] engine not built).
     pub fn search(
         &mut self,
         prn: Prn,
@@ -380,6 +414,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         config: &AcquisitionConfig,
         known: &[KnownSignal],
     ) -> Result<SearchReport, AcquisitionError> {
+        self.check_built()?;
         check_inputs(i, q, config)?;
         check_known(known)?;
         let dc = input_mean(i, q, config.samples_needed());
@@ -540,6 +575,10 @@ pub enum AcquisitionError {
     /// The quadrature samples are fewer than the in-phase samples.
     #[error("quadrature samples shorter than in-phase samples")]
     LengthMismatch,
+    /// The engine was made with [`Acquisition::blank`] and not built
+    /// ([`Acquisition::build`]).
+    #[error("acquisition engine not built")]
+    NotBuilt,
 }
 
 impl Error for AcquisitionError {
@@ -670,6 +709,36 @@ mod tests {
         assert_eq!(r.result.threshold, classic);
         assert!((r.result.doppler_hz - 420.0).abs() < 150.0, "{r:?}");
         assert!((r.result.code_phase_chips - 300.2).abs() < 0.5, "{r:?}");
+    }
+
+    /// A blank engine refuses to search until it is built; built in place, it searches as
+    /// one made by `new` (the same report, bit for bit).
+    #[test]
+    fn a_blank_engine_searches_only_once_built_and_then_as_new() {
+        let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (0.0, 0.0), 1);
+        let mut blank = Acquisition::<1024>::blank();
+        assert_eq!(
+            blank.search(prn(7), &i, Some(&q), 0, &config()),
+            Err(AcquisitionError::NotBuilt)
+        );
+        let candidate = engine().search(prn(7), &i, Some(&q), 0, &config()).unwrap();
+        assert_eq!(
+            blank
+                .cross_check(&candidate, &[], &i, Some(&q), &config(), 1.0)
+                .err(),
+            Some(AcquisitionError::NotBuilt)
+        );
+        blank.build().unwrap();
+        let built = blank.search_report(prn(7), &i, Some(&q), 0, &config());
+        assert_eq!(
+            built,
+            engine().search_report(prn(7), &i, Some(&q), 0, &config())
+        );
+        assert!(built.unwrap().result.detected);
+        assert_eq!(
+            Acquisition::<1000>::blank().build(),
+            Err(AcquisitionError::InvalidConfig)
+        );
     }
 
     /// With only the search's samples a candidate is reported but not detected (no dwell).

@@ -37,6 +37,9 @@ pub(super) struct Tone {
 }
 
 impl Tone {
+    /// No tone (the engine's empty slots).
+    pub(super) const NONE: Self = Self { step: 0 };
+
     /// The NCO step of the tone.
     pub(super) fn step(&self) -> u32 {
         self.step
