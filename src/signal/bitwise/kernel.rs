@@ -187,20 +187,21 @@ pub(crate) fn popcount(v: u32) -> u32 {
     byte_total(byte_counts(nibble_counts(v)))
 }
 
-/// `Σ popcount(x_w ⊕ t_w)` over the common words of `x` and `t`, at most [`CHUNK_WORDS`]:
-/// 4-bit counts summed over three words (at most 12), folded into 8-bit counts (at most
-/// 8 per word, 240 for 30 words), summed once at the end.
+/// `Σ popcount(x_w ⊕ t_w)` over the common words of `x` and `t`, at most [`CHUNK_WORDS`],
+/// folded into 8-bit counts (at most 8 per word, 240 for 30 words) and summed once at the end.
+/// On the Cortex-M ([`xor_count_swar`]) 4-bit counts are first summed over three words, which
+/// saves a fold per word in its registers; elsewhere every word is folded to 8-bit counts on
+/// its own and the words are summed lane by lane, a loop without a carried dependency that the
+/// compiler vectorizes with the baseline SIMD (SSE2 on x86-64: about twice the speed of a
+/// full population count per word, without `-C target-cpu`).
 #[inline(always)]
 pub(crate) fn xor_count(x: &[u32], t: &[u32]) -> u32 {
     #[cfg(not(target_arch = "arm"))]
     {
-        // Hosts: one plain loop that the vectorizer turns into SIMD population counts (the
-        // same integers: a population count is exact either way).
-        x.iter()
-            .zip(t)
-            .take(CHUNK_WORDS)
-            .map(|(a, b)| popcount(a ^ b))
-            .sum()
+        let bytes = x.iter().zip(t).take(CHUNK_WORDS).fold(0u32, |acc, (a, b)| {
+            acc.wrapping_add(byte_counts(nibble_counts(a ^ b)))
+        });
+        byte_total(bytes)
     }
     #[cfg(target_arch = "arm")]
     {
