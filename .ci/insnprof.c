@@ -14,26 +14,7 @@
 #include <stddef.h>
 #include <stdbool.h>
 
-typedef uint64_t qemu_plugin_id_t;
-typedef struct { const char *target_name; struct { int min, cur; } version;
-                 bool system_emulation; union { struct { int smp_vcpus, max_vcpus; } system; }; } qemu_info_t;
-struct qemu_plugin_tb; struct qemu_plugin_insn;
-enum qemu_plugin_cb_flags { QEMU_PLUGIN_CB_NO_REGS };
-typedef void (*tb_trans_cb)(qemu_plugin_id_t, struct qemu_plugin_tb *);
-typedef void (*udata_cb)(unsigned int, void *);
-typedef void (*atexit_cb)(qemu_plugin_id_t, void *);
-void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t, tb_trans_cb);
-void qemu_plugin_register_vcpu_tb_exec_cb(struct qemu_plugin_tb *, udata_cb, enum qemu_plugin_cb_flags, void *);
-size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *);
-uint64_t qemu_plugin_tb_vaddr(const struct qemu_plugin_tb *);
-struct qemu_plugin_insn *qemu_plugin_tb_get_insn(const struct qemu_plugin_tb *, size_t);
-const void *qemu_plugin_insn_data(const struct qemu_plugin_insn *);
-size_t qemu_plugin_insn_size(const struct qemu_plugin_insn *);
-void qemu_plugin_register_vcpu_insn_exec_cb(struct qemu_plugin_insn *, udata_cb, enum qemu_plugin_cb_flags, void *);
-void qemu_plugin_register_atexit_cb(qemu_plugin_id_t, atexit_cb, void *);
-void qemu_plugin_outs(const char *);
-
-__attribute__((visibility("default"))) int qemu_plugin_version = 1;
+#include "qemu_plugin_v1.h"
 
 typedef struct { uint64_t addr; char *name; uint64_t count; } Symbol;
 static Symbol *symbols;
@@ -71,10 +52,7 @@ static void tb_trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb) {
     qemu_plugin_register_vcpu_tb_exec_cb(tb, on_tb, QEMU_PLUGIN_CB_NO_REGS, b);
     for (size_t i = 0; i < n; i++) {
         struct qemu_plugin_insn *insn = qemu_plugin_tb_get_insn(tb, i);
-        uint16_t op = 0;
-        if (qemu_plugin_insn_size(insn) == 2) memcpy(&op, qemu_plugin_insn_data(insn), 2);
-        if (op == 0x46C0) qemu_plugin_register_vcpu_insn_exec_cb(insn, on_start, QEMU_PLUGIN_CB_NO_REGS, NULL);
-        if (op == 0x46C9) qemu_plugin_register_vcpu_insn_exec_cb(insn, on_stop, QEMU_PLUGIN_CB_NO_REGS, NULL);
+        watch_markers(insn, on_start, on_stop);
     }
 }
 
