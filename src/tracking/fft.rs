@@ -62,18 +62,19 @@ impl<const N: usize> Fft<N> {
             return false;
         }
         let twiddles = &mut self.twiddles;
-        let mut at = 0;
+        let mut at = 0usize;
         let mut quarter = first_quarter(N);
-        // (at most log₄ N stages)
+        // (at most log₄ N stages: quarter grows fourfold up to N; r·k < 3N and the table
+        // index stay far below 2³², wrapping forms only keep overflow checks out)
         while quarter < N {
-            let len = 4 * quarter;
+            let len = quarter.saturating_mul(4);
             for k in 0..quarter {
-                for r in 1..=3 {
-                    let a = -2.0 * core::f64::consts::PI * (r * k) as f64 / len as f64;
+                for r in 1..=3usize {
+                    let a = -2.0 * core::f64::consts::PI * r.wrapping_mul(k) as f64 / len as f64;
                     if let Some(w) = twiddles.get_mut(at) {
                         *w = [libm::cos(a) as f32, libm::sin(a) as f32];
                     }
-                    at += 1;
+                    at = at.wrapping_add(1);
                 }
             }
             quarter = len;
