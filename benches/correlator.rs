@@ -19,8 +19,8 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use gnss_attitude::signal::bitwise::{
-    BitBlock, BitCorrelator, BitCorrelatorConfig, CarrierLevels, CodeTable, PlaneBuffer,
-    PlaneFormat, Resolution,
+    BitBlock, BitCorrelator, BitCorrelatorConfig, BitScratch, CarrierLevels, CodeTable,
+    PlaneBuffer, PlaneFormat, Resolution,
 };
 use gnss_attitude::signal::{
     Correlator, CorrelatorConfig, Prn, SampleBlock, SampleFormat, SlaveTaps,
@@ -90,12 +90,14 @@ fn bench(c: &mut Criterion) {
                 "real 2-bit IF"
             }
         );
+        // (one scratch for the run, as a receiver's channels share one)
+        let mut scratch = BitScratch::new();
         group.bench_function(name, |b| {
             b.iter(|| {
                 corr.set_code_phase(0.0).unwrap_or_else(|e| panic!("{e}"));
                 let mut cursor = 0;
                 black_box(
-                    corr.run(black_box(&block), &mut cursor)
+                    corr.run_in(black_box(&block), &mut cursor, &mut scratch)
                         .unwrap_or_else(|e| panic!("{e}")),
                 )
             })
@@ -180,12 +182,14 @@ fn bench_bitwise(c: &mut Criterion) {
                 CarrierLevels::Three => 3,
             }
         );
+        // (one scratch for the run, as a receiver's channels share one)
+        let mut scratch = BitScratch::new();
         group.bench_function(name, |b| {
             b.iter(|| {
                 corr.set_code_phase(0.0).unwrap_or_else(|e| panic!("{e}"));
                 let mut cursor = 0;
                 black_box(
-                    corr.run(black_box(&block), &mut cursor)
+                    corr.run_in(black_box(&block), &mut cursor, &mut scratch)
                         .unwrap_or_else(|e| panic!("{e}")),
                 )
             })

@@ -1,11 +1,12 @@
 //! Property tests: the bit-parallel correlator equals its scalar reference bit for bit on
 //! random planes, random NCO phases and steps (fast and general carrier paths, code rates up
 //! to 1 % off nominal), random block lengths (code-period wraps and span edges anywhere inside
-//! words), 1- and 2-bit samples, complex and real, 2- and 3-level carriers, both tap sets.
+//! words), 1- and 2-bit samples, complex and real, 2- and 3-level carriers, both tap sets;
+//! with one scratch shared by two correlators that run in turn, as a receiver's channels do.
 
 use gnss_attitude::signal::bitwise::{
-    AntennaPlanes, BitBlock, BitCorrelator, BitCorrelatorConfig, CarrierLevels, CodeTable,
-    PlaneFormat, Resolution, ScalarReference,
+    AntennaPlanes, BitBlock, BitCorrelator, BitCorrelatorConfig, BitScratch, CarrierLevels,
+    CodeTable, PlaneFormat, Resolution, ScalarReference,
 };
 use gnss_attitude::signal::{CorrelatorConfig, Prn, SlaveTaps};
 use proptest::prelude::*;
@@ -138,6 +139,12 @@ fn run_case(c: &Case) -> Result<usize, TestCaseError> {
     slow.carrier = fast.carrier();
     slow.code = fast.code();
     slow.carrier_total = fast.carrier_phase_total();
+    // Another satellite's correlator on the same blocks, run before each call with the same
+    // scratch: what it leaves there must not reach the results.
+    let mut other = BitCorrelator::<3>::new(Prn::new(c.prn % 32 + 1).unwrap(), &config).unwrap();
+    other.set_carrier_frequency(-0.5 * c.carrier_hz).unwrap();
+    other.set_code_phase(1022.0 - c.code_phase).unwrap();
+    let mut scratch = BitScratch::new();
     let mut first = 0u64;
     let mut outputs = 0;
     for &len in &c.blocks {
@@ -147,10 +154,11 @@ fn run_case(c: &Case) -> Result<usize, TestCaseError> {
             .map(|x| AntennaPlanes::new(format, len, &x[0], &x[1], &x[2], &x[3]).unwrap())
             .collect();
         let block = BitBlock::new(first, &table, [ant[0], ant[1], ant[2]]).unwrap();
-        let (mut cf, mut cs) = (0usize, 0usize);
+        let (mut cf, mut cs, mut co) = (0usize, 0usize, 0usize);
         // Bounded: each call advances the cursor or returns None at the block end.
         for _ in 0..64 {
-            let a = fast.run(&block, &mut cf).unwrap();
+            other.run_in(&block, &mut co, &mut scratch).unwrap();
+            let a = fast.run_in(&block, &mut cf, &mut scratch).unwrap();
             let b = slow.run(&block, &mut cs).unwrap();
             prop_assert_eq!(cf, cs);
             prop_assert_eq!(a, b, "case {:?}", c);

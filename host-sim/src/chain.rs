@@ -12,7 +12,7 @@
 //! values of the same samples.
 
 use anyhow::{Context, Result};
-use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CodeTable, PlaneBuffer};
+use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, BitScratch, CodeTable, PlaneBuffer};
 use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
 use gnss_attitude::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use gnss_attitude::tracking::{
@@ -307,8 +307,9 @@ fn track_planes(
                 };
                 let mut epochs = Vec::new();
                 let mut cursor = 0;
+                let mut scratch = BitScratch::new();
                 while cursor < block.len() {
-                    if let Some(e) = channel.process(&block, &mut cursor)? {
+                    if let Some(e) = channel.process_in(&block, &mut cursor, &mut scratch)? {
                         epochs.push(e);
                     }
                 }

@@ -26,8 +26,8 @@
 
 use anyhow::{anyhow, bail, Result};
 use gnss_attitude::signal::bitwise::{
-    BitBlock, BitCorrelator, BitCorrelatorConfig, CarrierLevels, CodeTable, PlaneBuffer,
-    PlaneFormat, Resolution,
+    BitBlock, BitCorrelator, BitCorrelatorConfig, BitScratch, CarrierLevels, CodeTable,
+    PlaneBuffer, PlaneFormat, Resolution,
 };
 use gnss_attitude::signal::{
     Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, SlaveTaps,
@@ -196,8 +196,9 @@ fn run_bits(
     out: &mut Vec<[Iq; ANTENNAS]>,
 ) -> Result<()> {
     let mut cursor = 0;
+    let mut scratch = BitScratch::new();
     while cursor < block.len() {
-        if let Some(e) = c.run(block, &mut cursor)? {
+        if let Some(e) = c.run_in(block, &mut cursor, &mut scratch)? {
             out.extend(prompts(&e));
         }
     }

@@ -133,6 +133,8 @@ pub struct SampleReceiver<const S: usize, const N: usize, C: Correlate<3> = Corr
     settings: C::Settings,
     acquisition: Acquisition<N>,
     channels: Vec<(Channel<3, C>, ChannelStatus), S>,
+    /// The channels' correlator working memory, one for all ([`Correlate::run_in`]).
+    scratch: C::Scratch,
     adapter: ObservationAdapter,
     clock: EpochClock,
     receiver: AttitudeReceiver,
@@ -175,6 +177,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
             config,
             acquisition,
             channels: Vec::new(),
+            scratch: C::Scratch::default(),
             frontier: None,
         })
     }
@@ -386,7 +389,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
                     if *cursor >= end {
                         break;
                     }
-                    let Some(epoch) = channel.process(&sub, cursor)? else {
+                    let Some(epoch) = channel.process_in(&sub, cursor, &mut self.scratch)? else {
                         continue;
                     };
                     report.epochs = report.epochs.saturating_add(1);

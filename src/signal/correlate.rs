@@ -15,7 +15,9 @@
 //! noise tap's floor below which a reading is the samples' rounding rather than thermal noise,
 //! comes from the correlator ([`Correlate::rounding_noise_per_sample`]).
 
-use super::bitwise::{BitBlock, BitCorrelator, BitCorrelatorConfig, BitCorrelatorError};
+use super::bitwise::{
+    BitBlock, BitCorrelator, BitCorrelatorConfig, BitCorrelatorError, BitScratch,
+};
 use super::bitwise::{CarrierLevels, PlaneFormat};
 use super::ca_code::Prn;
 use super::correlator::{Correlator, CorrelatorConfig, EpochCorrelations};
@@ -58,6 +60,9 @@ pub trait Correlate<const A: usize>: Clone + core::fmt::Debug {
     /// The error of the configuration, the NCO setters and [`run`](Self::run); tracking keeps
     /// it as the cause of its own error.
     type Error: Copy + core::fmt::Debug + Into<TrackingError>;
+    /// Working memory of [`run_in`](Self::run_in), shared by correlators that run in turn
+    /// (`()` for the `i8` correlator, a [`BitScratch`] of 3.3 KB for the bit-parallel one).
+    type Scratch: Default + core::fmt::Debug;
 
     /// A correlator for `prn` with the NCOs at zero phase, the configured IF and the nominal
     /// code rate.
@@ -127,14 +132,29 @@ pub trait Correlate<const A: usize>: Clone + core::fmt::Debug {
     /// Correlates `block` from `*cursor` to the end of the block or of the current code
     /// period, advancing `*cursor`; the period's correlations when it completed.
     ///
+    /// `scratch` holds nothing between calls: one serves every correlator of a receiver.
+    ///
     /// # Errors
     /// A cursor beyond the block, or a block this correlator cannot read; the correlator is
     /// then unchanged.
+    fn run_in(
+        &mut self,
+        block: &Self::Block<'_>,
+        cursor: &mut usize,
+        scratch: &mut Self::Scratch,
+    ) -> Result<Option<EpochCorrelations<A>>, Self::Error>;
+
+    /// [`run_in`](Self::run_in) with a scratch made for this call.
+    ///
+    /// # Errors
+    /// As [`run_in`](Self::run_in).
     fn run(
         &mut self,
         block: &Self::Block<'_>,
         cursor: &mut usize,
-    ) -> Result<Option<EpochCorrelations<A>>, Self::Error>;
+    ) -> Result<Option<EpochCorrelations<A>>, Self::Error> {
+        self.run_in(block, cursor, &mut Self::Scratch::default())
+    }
 
     /// The noise tap's power per sample (`|N|²`, in the taps' units) that the samples' rounding
     /// alone leaves (`complex`: I/Q samples): the floor below which a noise reading is not
@@ -185,6 +205,7 @@ impl<const A: usize> Correlate<A> for Correlator<A> {
     type Block<'a> = SampleBlock<'a, A>;
     type Settings = ();
     type Error = SignalError;
+    type Scratch = ();
 
     fn new(prn: Prn, config: &CorrelatorConfig, _: &()) -> Result<Self, SignalError> {
         Self::new(prn, config)
@@ -238,10 +259,11 @@ impl<const A: usize> Correlate<A> for Correlator<A> {
         Self::reset_integration(self);
     }
 
-    fn run(
+    fn run_in(
         &mut self,
         block: &SampleBlock<'_, A>,
         cursor: &mut usize,
+        (): &mut (),
     ) -> Result<Option<EpochCorrelations<A>>, SignalError> {
         Self::run(self, block, cursor)
     }
@@ -270,6 +292,7 @@ impl<const A: usize> Correlate<A> for BitCorrelator<A> {
     type Block<'a> = BitBlock<'a, A>;
     type Settings = BitSettings;
     type Error = BitCorrelatorError;
+    type Scratch = BitScratch;
 
     fn new(
         prn: Prn,
@@ -336,12 +359,13 @@ impl<const A: usize> Correlate<A> for BitCorrelator<A> {
         Self::reset_integration(self);
     }
 
-    fn run(
+    fn run_in(
         &mut self,
         block: &BitBlock<'_, A>,
         cursor: &mut usize,
+        scratch: &mut BitScratch,
     ) -> Result<Option<EpochCorrelations<A>>, BitCorrelatorError> {
-        Self::run(self, block, cursor)
+        Self::run_in(self, block, cursor, scratch)
     }
 
     /// The samples are odd integers (`±1`, `±3`: a step of 2, so `4/12` per component of

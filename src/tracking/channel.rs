@@ -333,6 +333,20 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
         block: &C::Block<'_>,
         cursor: &mut usize,
     ) -> Result<Option<TrackingEpoch<A>>, TrackingError> {
+        self.process_in(block, cursor, &mut C::Scratch::default())
+    }
+
+    /// [`Self::process`] with the correlator's working memory `scratch`
+    /// ([`Correlate::run_in`]), which channels that run in turn share.
+    ///
+    /// # Errors
+    /// As [`Self::process`].
+    pub fn process_in(
+        &mut self,
+        block: &C::Block<'_>,
+        cursor: &mut usize,
+        scratch: &mut C::Scratch,
+    ) -> Result<Option<TrackingEpoch<A>>, TrackingError> {
         if self.state == ChannelState::Idle {
             return Err(TrackingError::NotStarted);
         }
@@ -347,7 +361,7 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
             self.pending = None;
         }
         self.complex = block.is_complex();
-        let run = self.correlator.run(block, cursor);
+        let run = self.correlator.run_in(block, cursor, scratch);
         self.next_sample = block.first_sample().wrapping_add(*cursor as u64);
         let Some(c) = run.map_err(Into::into)? else {
             return Ok(None);

@@ -28,7 +28,7 @@ use gnss_attitude::signal::selftest::{
 };
 use gnss_attitude::signal::{Correlator, CorrelatorConfig, EpochCorrelations, Iq, Prn, SampleBlock, SampleFormat, Taps};
 use gnss_attitude::signal::bitwise::selftest::{pack_self_test, self_test_correlator, BIT_SELF_TEST_WORDS};
-use gnss_attitude::signal::bitwise::{BitBlock, CarrierLevels, CodeTable, PlaneBuffer, PlaneFormat, Resolution};
+use gnss_attitude::signal::bitwise::{BitBlock, BitScratch, CarrierLevels, CodeTable, PlaneBuffer, PlaneFormat, Resolution};
 use gnss_attitude::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, LockFlags, SearchResult, TrackingEpoch,
 };
@@ -888,6 +888,8 @@ fn gyro_aided_budgets() {
 #[inline(never)]
 fn bitwise_budgets() {
     let s = &SIGNAL_SAMPLES;
+    // The chunk loop's scratch, as a receiver shares it between its channels.
+    let mut scratch = BitScratch::new();
     let cases = [
         (Resolution::OneBit, true, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier, E/P/L+N ref + P slaves"),
         (Resolution::TwoBit, true, CarrierLevels::Two, "bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 2-bit, 2-level carrier, E/P/L+N ref + P slaves"),
@@ -919,7 +921,7 @@ fn bitwise_budgets() {
         };
         let out = measure(name, || {
             let mut cursor = 0;
-            black_box(&mut corr).run(black_box(&block), &mut cursor)
+            black_box(&mut corr).run_in(black_box(&block), &mut cursor, &mut scratch)
         });
         if !matches!(out, Ok(Some(ref e)) if e.samples == 2600) {
             hprintln!("budget bitwise: {} did not complete one code period: {:?}", name, out.map(|o| o.map(|e| e.samples)));
@@ -939,7 +941,7 @@ fn bitwise_budgets() {
         ) {
             let _ = measure("bit-parallel correlator 3 ant x 1 sat, 1 ms @ 2.6 Msps complex 1-bit, 2-level carrier at 40 kHz Doppler, E/P/L+N ref + P slaves", || {
                 let mut cursor = 0;
-                black_box(&mut corr).run(black_box(&block), &mut cursor).is_ok()
+                black_box(&mut corr).run_in(black_box(&block), &mut cursor, &mut scratch).is_ok()
             });
         }
     }

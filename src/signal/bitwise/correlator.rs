@@ -147,8 +147,6 @@ pub struct BitCorrelator<const A: usize> {
     acc: [[[u32; MAX_STREAMS]; 4]; A],
     /// Samples of the `c` streams' and of the `s` streams' support.
     support: [u32; 2],
-    /// Scratch of the chunk loop (replica and stream words), reused chunk by chunk.
-    work: Workspace,
     samples: u32,
     epoch_first_sample: u64,
     epoch_code_phase: u64,
@@ -189,7 +187,6 @@ impl<const A: usize> BitCorrelator<A> {
             ext: code::extended_code(prn),
             acc: [[[0; MAX_STREAMS]; 4]; A],
             support: [0; 2],
-            work: Workspace::new(),
             samples: 0,
             epoch_first_sample: 0,
             epoch_code_phase: 0,
@@ -340,22 +337,39 @@ impl<const A: usize> BitCorrelator<A> {
         self.partial = true;
     }
 
+    /// [`Self::run_in`] with a scratch of its own, made (and zeroed: 3.3 KB) for this call.
+    /// Where correlators run in turn (a receiver's channels), one [`BitScratch`] passed to
+    /// [`Self::run_in`] serves them all.
+    ///
+    /// # Errors
+    /// As [`Self::run_in`].
+    pub fn run(
+        &mut self,
+        block: &BitBlock<'_, A>,
+        cursor: &mut usize,
+    ) -> Result<Option<EpochCorrelations<A>>, BitCorrelatorError> {
+        self.run_in(block, cursor, &mut BitScratch::new())
+    }
+
     /// Correlates `block` from sample `*cursor` until the end of the block or the end of the
     /// current code period, whichever comes first, and advances `*cursor`. Returns the
     /// correlations when a code period completed, `None` when the block ended first (the
     /// integration continues in the next call, which must pass the next block of the same
     /// sample stream).
     ///
-    /// Bounded: at most one code period of samples per call.
+    /// Bounded: at most one code period of samples per call. `scratch` holds only the chunk
+    /// loop's words between their writing and their reading: any correlator's scratch serves
+    /// (the result does not depend on what it held).
     ///
     /// # Errors
     /// [`BitCorrelatorError::CursorOutOfRange`] when `*cursor > block.len()`,
     /// [`BitCorrelatorError::FormatMismatch`] or [`BitCorrelatorError::TableMismatch`] for a
     /// block that does not fit this correlator; the correlator is then unchanged.
-    pub fn run(
+    pub fn run_in(
         &mut self,
         block: &BitBlock<'_, A>,
         cursor: &mut usize,
+        scratch: &mut BitScratch,
     ) -> Result<Option<EpochCorrelations<A>>, BitCorrelatorError> {
         let start = *cursor;
         if start > block.len() {
@@ -378,7 +392,7 @@ impl<const A: usize> BitCorrelator<A> {
             self.epoch_code_phase = self.code.phase;
             self.epoch_carrier_phase = self.carrier_total;
         }
-        self.correlate_span(block, start, n);
+        self.correlate_span(block, start, n, &mut scratch.work);
         *cursor = start.saturating_add(n); // (n ≤ len − start: never saturates)
         if (n as u64) < to_wrap {
             return Ok(None);
@@ -423,7 +437,13 @@ impl<const A: usize> BitCorrelator<A> {
     }
 
     /// Correlates `n` samples from `start` (all within one code period), chunk by chunk.
-    fn correlate_span(&mut self, block: &BitBlock<'_, A>, start: usize, n: usize) {
+    fn correlate_span(
+        &mut self,
+        block: &BitBlock<'_, A>,
+        start: usize,
+        n: usize,
+        work: &mut Workspace,
+    ) {
         let end = start.saturating_add(n);
         let mut s = start;
         // Bounded: every pass but the last covers a whole chunk (at most 70 passes for the
@@ -433,7 +453,7 @@ impl<const A: usize> BitCorrelator<A> {
             // (s < end: w1 > w0 and stop > s; saturating forms make the bounds visible)
             let w1 = (end.saturating_sub(1) / WORD_SAMPLES + 1).min(w0 + CHUNK_WORDS);
             let stop = end.min(w1.saturating_mul(WORD_SAMPLES));
-            self.chunk(block, w0, w1, s, stop);
+            self.chunk(block, (w0, w1), (s, stop), work);
             let m = stop.saturating_sub(s) as u64;
             // (the code phase is modular: wrapped at every code period, far from 2⁶⁴)
             self.code.phase = self.code.phase.wrapping_add(m.wrapping_mul(self.code.step));
@@ -449,16 +469,22 @@ impl<const A: usize> BitCorrelator<A> {
     }
 
     /// One chunk: the words `w0..w1` of the block, samples `s..stop` of them.
-    fn chunk(&mut self, block: &BitBlock<'_, A>, w0: usize, w1: usize, s: usize, stop: usize) {
+    fn chunk(
+        &mut self,
+        block: &BitBlock<'_, A>,
+        (w0, w1): (usize, usize),
+        (s, stop): (usize, usize),
+        work: &mut Workspace,
+    ) {
         // (w0 = s / WORD_SAMPLES < w1, stop ≤ w1·WORD_SAMPLES: the saturations never act)
         let nw = w1.saturating_sub(w0).min(CHUNK_WORDS);
         let lead = s.saturating_sub(w0.saturating_mul(WORD_SAMPLES));
         let tail = w1.saturating_mul(WORD_SAMPLES).saturating_sub(stop);
         let l3 = self.levels == CarrierLevels::Three;
-        self.carrier_words(nw, lead, tail);
-        self.code_words(block.table(), nw, lead, tail);
+        self.carrier_words(nw, lead, tail, work);
+        self.code_words(block.table(), nw, lead, tail, work);
         if l3 {
-            for c in self.work.carrier.iter().take(nw) {
+            for c in work.carrier.iter().take(nw) {
                 // (support counts of one epoch, at most 2¹⁶: the saturation never acts)
                 self.support[0] = self.support[0].saturating_add(kernel::popcount(c.nzc));
                 self.support[1] = self.support[1].saturating_add(kernel::popcount(c.nzs));
@@ -470,7 +496,6 @@ impl<const A: usize> BitCorrelator<A> {
         }
         let (cx, tb) = (self.format.complex, self.format.two_bit());
         let edges = [u32::MAX << (lead & 31), u32::MAX >> (tail & 31)];
-        let work = &mut self.work;
         for (a, acc) in (0..A).zip(self.acc.iter_mut()) {
             let Some(planes) = block.planes(a) else {
                 continue;
@@ -496,13 +521,13 @@ impl<const A: usize> BitCorrelator<A> {
     /// The carrier words of the chunk's `nw` words into the workspace, with the span's edges
     /// masked out (`lead` samples before the span in the first word, `tail` after it in the
     /// last).
-    fn carrier_words(&mut self, nw: usize, lead: usize, tail: usize) {
+    fn carrier_words(&self, nw: usize, lead: usize, tail: usize, work: &mut Workspace) {
         let phase = self
             .carrier
             .phase
             .wrapping_sub(self.carrier.step.wrapping_mul(lead as u32));
         let step = CarrierStep::new(self.carrier.step);
-        let words = self.work.carrier.get_mut(..nw).unwrap_or_default();
+        let words = work.carrier.get_mut(..nw).unwrap_or_default();
         carrier::fill(words, self.levels, phase, &step);
         if let Some(first) = words.first_mut() {
             let mask = u32::MAX << (lead & 31);
@@ -519,7 +544,14 @@ impl<const A: usize> BitCorrelator<A> {
     /// The code words of the chunk's four taps (E, P, L, N) into the workspace: the prompt
     /// string with margins for the shifted taps, the taps as 32-bit windows of it, masked with
     /// the carrier supports (3-level) or the span's edges (2-level).
-    fn code_words(&mut self, table: &CodeTable, nw: usize, lead: usize, tail: usize) {
+    fn code_words(
+        &self,
+        table: &CodeTable,
+        nw: usize,
+        lead: usize,
+        tail: usize,
+        work: &mut Workspace,
+    ) {
         let d = self.offset;
         let back = self.noise_delay.max(d).div_ceil(WORD_SAMPLES);
         let forward = d.div_ceil(WORD_SAMPLES);
@@ -538,7 +570,6 @@ impl<const A: usize> BitCorrelator<A> {
         let word_step = (WORD_SAMPLES as u64).wrapping_mul(step);
         let (chips, frac) = ((word_step >> 32) as u32, word_step as u32);
         let step4 = (step >> 2) as u32;
-        let work = &mut self.work;
         // Two passes (the word starts, then the words) keep each loop's state in registers.
         for c in work.cursors.iter_mut().take(words) {
             *c = at;
@@ -580,8 +611,33 @@ impl<const A: usize> BitCorrelator<A> {
     }
 }
 
+/// The bit-parallel correlators' scratch: the words of one chunk's replica and of one
+/// antenna's streams, written and read within one call of [`BitCorrelator::run_in`]
+/// (3,324 B). One serves every correlator that runs in turn: a receiver's channels share
+/// one instead of carrying one each.
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BitScratch {
+    work: Workspace,
+}
+
+impl BitScratch {
+    /// A scratch (all zeros).
+    pub const fn new() -> Self {
+        Self {
+            work: Workspace::new(),
+        }
+    }
+}
+
+impl Default for BitScratch {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The chunk loop's scratch: the replica of one chunk, shared by the antennas, and the stream
-/// words of the antenna being correlated (2.8 KiB).
+/// words of the antenna being correlated (3.2 KiB).
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 struct Workspace {
@@ -721,9 +777,9 @@ mod tests {
     #[test]
     fn memory_is_as_documented() {
         // The module documentation quotes these sizes.
-        assert_eq!(core::mem::size_of::<Workspace>(), 3324);
+        assert_eq!(core::mem::size_of::<BitScratch>(), 3324);
         let size = core::mem::size_of::<BitCorrelator<3>>();
-        assert!((3900..4100).contains(&size), "{size}");
+        assert!((600..800).contains(&size), "{size}");
         assert_eq!(core::mem::size_of::<CodeTable>(), 8192 + 8);
     }
 }

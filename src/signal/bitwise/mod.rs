@@ -103,9 +103,12 @@
 //! 2.9 / 2.3 and 1.5 / 0.9 dB).
 //!
 //! # Memory and cost
-//! A [`BitCorrelator`] holds its chunk workspace (replica and stream words of 30 words,
-//! 3.3 KiB; `size_of::<BitCorrelator<3>>()` is 3.9 KiB) and the extended code (136 B); the [`CodeTable`] (8 KiB) is shared by every
-//! correlator of a front end through the blocks. Planes cost 4 bytes per 32 samples and
+//! A [`BitCorrelator`] holds its NCOs, accumulators and the extended code (136 B):
+//! `size_of::<BitCorrelator<3>>()` is 0.7 KiB. Its chunk loop's words (replica and stream
+//! words of 30 words, 3.3 KiB) live in a [`BitScratch`] passed to [`BitCorrelator::run_in`],
+//! one for all the correlators that run in turn (a
+//! [`SampleReceiver`](crate::receiver::SampleReceiver) keeps one for its channels). The
+//! [`CodeTable`] (8 KiB) is shared by every correlator of a front end through the blocks. Planes cost 4 bytes per 32 samples and
 //! plane. Measured costs (Cortex-M4F instruction counts of the firmware's budget regions, host
 //! times of `benches/correlator.rs`) are printed by `.ci/run`: on the M4F, 3 antennas ×
 //! 1 satellite at 2.6 Msps complex with prompt-only slaves cost 4.14 instructions per
@@ -131,6 +134,6 @@ pub mod selftest;
 pub use block::BitBlock;
 pub use carrier::CarrierLevels;
 pub use code::CodeTable;
-pub use correlator::{BitCorrelator, BitCorrelatorConfig, BitCorrelatorError};
+pub use correlator::{BitCorrelator, BitCorrelatorConfig, BitCorrelatorError, BitScratch};
 pub use planes::{AntennaPlanes, PlaneBuffer, PlaneError, PlaneFormat, Resolution};
 pub use reference::ScalarReference;
