@@ -90,14 +90,12 @@ fn bench(c: &mut Criterion) {
                 "real 2-bit IF"
             }
         );
-        // (one scratch for the run, as a receiver's channels share one)
-        let mut scratch = BitScratch::new();
         group.bench_function(name, |b| {
             b.iter(|| {
                 corr.set_code_phase(0.0).unwrap_or_else(|e| panic!("{e}"));
                 let mut cursor = 0;
                 black_box(
-                    corr.run_in(black_box(&block), &mut cursor, &mut scratch)
+                    corr.run(black_box(&block), &mut cursor)
                         .unwrap_or_else(|e| panic!("{e}")),
                 )
             })

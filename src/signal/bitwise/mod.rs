@@ -111,9 +111,9 @@
 //! [`CodeTable`] (8 KiB) is shared by every correlator of a front end through the blocks. Planes cost 4 bytes per 32 samples and
 //! plane. Measured costs (Cortex-M4F instruction counts of the firmware's budget regions, host
 //! times of `benches/correlator.rs`) are printed by `.ci/run`: on the M4F, 3 antennas ×
-//! 1 satellite at 2.6 Msps complex with prompt-only slaves cost 4.14 instructions per
-//! sample·channel for 1-bit samples and the 2-level carrier, 6.24 for 2-bit samples (3-level
-//! carrier: 6.85 / 10.56; the `i8` correlator: 46.3). Of the 1-bit figure the per-antenna
+//! 1 satellite at 2.6 Msps complex with prompt-only slaves cost 4.16 instructions per
+//! sample·channel for 1-bit samples and the 2-level carrier, 6.26 for 2-bit samples (3-level
+//! carrier: 6.86 / 10.58; the `i8` correlator: 46.8). Of the 1-bit figure the per-antenna
 //! XOR/popcount kernel is 55 %, the code replica (four byte lookups per prompt word, four tap
 //! windows) 27 %, the carrier words 11 % (docs/METHODS.md has the profile).
 //!
