@@ -392,7 +392,7 @@ impl<const A: usize> BitCorrelator<A> {
             self.epoch_code_phase = self.code.phase;
             self.epoch_carrier_phase = self.carrier_total;
         }
-        self.correlate_span(block, start, n, &mut scratch.work);
+        self.correlate_span(block, start, n, scratch);
         *cursor = start.saturating_add(n); // (n ≤ len − start: never saturates)
         if (n as u64) < to_wrap {
             return Ok(None);
@@ -442,7 +442,7 @@ impl<const A: usize> BitCorrelator<A> {
         block: &BitBlock<'_, A>,
         start: usize,
         n: usize,
-        work: &mut Workspace,
+        work: &mut BitScratch,
     ) {
         let end = start.saturating_add(n);
         let mut s = start;
@@ -474,7 +474,7 @@ impl<const A: usize> BitCorrelator<A> {
         block: &BitBlock<'_, A>,
         (w0, w1): (usize, usize),
         (s, stop): (usize, usize),
-        work: &mut Workspace,
+        work: &mut BitScratch,
     ) {
         // (w0 = s / WORD_SAMPLES < w1, stop ≤ w1·WORD_SAMPLES: the saturations never act)
         let nw = w1.saturating_sub(w0).min(CHUNK_WORDS);
@@ -521,7 +521,7 @@ impl<const A: usize> BitCorrelator<A> {
     /// The carrier words of the chunk's `nw` words into the workspace, with the span's edges
     /// masked out (`lead` samples before the span in the first word, `tail` after it in the
     /// last).
-    fn carrier_words(&self, nw: usize, lead: usize, tail: usize, work: &mut Workspace) {
+    fn carrier_words(&self, nw: usize, lead: usize, tail: usize, work: &mut BitScratch) {
         let phase = self
             .carrier
             .phase
@@ -550,7 +550,7 @@ impl<const A: usize> BitCorrelator<A> {
         nw: usize,
         lead: usize,
         tail: usize,
-        work: &mut Workspace,
+        work: &mut BitScratch,
     ) {
         let d = self.offset;
         let back = self.noise_delay.max(d).div_ceil(WORD_SAMPLES);
@@ -611,36 +611,13 @@ impl<const A: usize> BitCorrelator<A> {
     }
 }
 
-/// The bit-parallel correlators' scratch: the words of one chunk's replica and of one
-/// antenna's streams, written and read within one call of [`BitCorrelator::run_in`]
-/// (3,324 B). One serves every correlator that runs in turn: a receiver's channels share
-/// one instead of carrying one each.
+/// The bit-parallel correlators' scratch: the words of one chunk's replica, shared by the
+/// antennas, and of the streams of the antenna being correlated, written and read within one
+/// call of [`BitCorrelator::run_in`] (3,324 B). One serves every correlator that runs in turn:
+/// a receiver's channels share one instead of carrying one each.
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BitScratch {
-    work: Workspace,
-}
-
-impl BitScratch {
-    /// A scratch (all zeros).
-    pub const fn new() -> Self {
-        Self {
-            work: Workspace::new(),
-        }
-    }
-}
-
-impl Default for BitScratch {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// The chunk loop's scratch: the replica of one chunk, shared by the antennas, and the stream
-/// words of the antenna being correlated (3.2 KiB).
-#[derive(Clone, Debug)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-struct Workspace {
     carrier: [CarrierWords; CHUNK_WORDS],
     /// The prompt string of the chunk and its margins.
     prompt: [u32; PROMPT_WORDS],
@@ -653,8 +630,9 @@ struct Workspace {
     streams: StreamWords,
 }
 
-impl Workspace {
-    const fn new() -> Self {
+impl BitScratch {
+    /// A scratch (all zeros).
+    pub const fn new() -> Self {
         Self {
             carrier: [CarrierWords {
                 c: 0,
@@ -669,6 +647,12 @@ impl Workspace {
             taps_s: [[0; CHUNK_WORDS]; 4],
             streams: [[0; CHUNK_WORDS]; MAX_STREAMS],
         }
+    }
+}
+
+impl Default for BitScratch {
+    fn default() -> Self {
+        Self::new()
     }
 }
 
@@ -720,7 +704,7 @@ fn chunk_planes<'a>(
 #[inline(never)]
 fn antenna<const CX: bool, const TB: bool, const L3: bool>(
     p: ChunkPlanes<'_>,
-    work: &mut Workspace,
+    work: &mut BitScratch,
     chunk: (usize, [u32; 2]),
     all_taps: bool,
     acc: &mut [[u32; MAX_STREAMS]; 4],
