@@ -439,7 +439,16 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
 
     /// Every channel's cross-correlation check against the others
     /// ([`Channel::check_cross_correlation`]); returns how many released themselves.
+    /// The probes (f64 code phases: soft float on the M4F) are gathered only in the
+    /// milliseconds in which some channel's test is due.
     fn check_cross_correlations(&mut self) -> u8 {
+        if !self
+            .channels
+            .iter()
+            .any(|(c, _)| c.cross_correlation_test_pending())
+        {
+            return 0;
+        }
         let mut probes: Vec<SignalProbe, S> = Vec::new();
         for p in self.channels.iter().filter_map(|(c, _)| c.probe()) {
             // One probe per channel: at most S, the capacity.

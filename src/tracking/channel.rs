@@ -614,6 +614,18 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
             || w.wrapping_add(stagger) % CROSS_CORRELATION_SETTLED_EVERY == 0
     }
 
+    /// Whether [`Channel::check_cross_correlation`] would run its test now: a lock window
+    /// completed since the last judgement, the channel is not held, and the window is due
+    /// (every window while the channel settles, then one in ten). Makes no probe (no soft float on the M4F):
+    /// a receiver gathers the others' [`Channel::probe`]s only when some channel needs them.
+    pub fn cross_correlation_test_pending(&self) -> bool {
+        self.watch.last.is_some()
+            && self.state != ChannelState::Idle
+            && self.watch.windows != self.watch.judged
+            && !self.lock.held()
+            && self.cross_correlation_due()
+    }
+
     /// Tests the channel's last lock window against the cross-correlation of the stronger
     /// `others` (the other channels' [`Channel::probe`]s on the same samples;
     /// [`crate::tracking::xcorr`]). Once
@@ -621,14 +633,11 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
     /// channel releases itself: state [`ChannelState::Lost`], no lock until the next hand-over;
     /// returns the strongest source then. Each window is judged once.
     pub fn check_cross_correlation(&mut self, others: &[SignalProbe]) -> Option<Prn> {
+        if !self.cross_correlation_test_pending() {
+            return None;
+        }
         let me = self.probe()?;
-        if self.watch.windows == self.watch.judged || self.lock.held() {
-            return None;
-        }
         self.watch.judged = self.watch.windows;
-        if !self.cross_correlation_due() {
-            return None;
-        }
         let epoch_s = 1e-3 * f32::from(self.config.lock_window);
         let test = CrossCorrelationTest {
             epoch_aligned: true,
@@ -716,5 +725,54 @@ impl Error for TrackingError {
             Self::Signal(e) => e.kind(),
             Self::Bitwise(e) => e.kind(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The receiver gathers probes only when [`Channel::cross_correlation_test_pending`]: it
+    /// must hold exactly for the windows the check judges (every window while settling, then
+    /// one in ten staggered by PRN), once per window, and never for a held channel.
+    #[test]
+    fn a_test_is_pending_exactly_for_the_windows_the_check_judges() {
+        let prn = Prn::new(23).unwrap();
+        let mut channel = Channel::<3>::new(prn, &ChannelConfig::new(2.6e6, 0.0)).unwrap();
+        let start = SearchResult {
+            prn,
+            detected: true,
+            metric: 10.0,
+            threshold: 2.0,
+            doppler_hz: 1200.0,
+            code_phase_chips: 100.0,
+            first_sample: 0,
+        };
+        channel.start(&start).unwrap();
+        assert!(!channel.cross_correlation_test_pending(), "no window yet");
+        let mut judged = [false; 61];
+        for (w, judged) in judged.iter_mut().enumerate().skip(1) {
+            channel.watch.windows = w as u32;
+            channel.watch.last = Some(WindowEstimate {
+                signal_power: 1.0,
+                ..WindowEstimate::default()
+            });
+            *judged = channel.cross_correlation_test_pending();
+            // alone, nothing explains the window: the channel is kept
+            assert_eq!(channel.check_cross_correlation(&[]), None);
+            assert!(
+                !channel.cross_correlation_test_pending(),
+                "window {w} judged twice"
+            );
+        }
+        for (w, &judged) in judged.iter().enumerate().skip(1) {
+            assert_eq!(judged, w <= 10 || (w + 23) % 10 == 0, "window {w}");
+        }
+        channel.watch.windows += 1;
+        channel.lock.hold();
+        assert!(
+            !channel.cross_correlation_test_pending(),
+            "a held channel is never tested"
+        );
     }
 }
