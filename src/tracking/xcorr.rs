@@ -71,9 +71,9 @@ pub fn code_cross_correlation(
     r
 }
 
-/// [`code_cross_correlation`] at `D` Doppler offsets in one pass over the codes (the chip
-/// products are shared; each offset's sum is the same sequence of operations as alone, so
-/// the results are equal bit for bit). Non-finite inputs give 0.
+/// [`code_cross_correlation`] at `D` Doppler offsets in one pass over the codes (each
+/// offset's sums are the same sequence of operations as alone, so the results are equal bit
+/// for bit). Non-finite inputs give 0.
 fn cross_correlations<const D: usize>(
     a: Prn,
     b: Prn,
@@ -81,47 +81,100 @@ fn cross_correlations<const D: usize>(
     start_chip_a: f64,
     doppler_offsets_hz: [f32; D],
 ) -> [f32; D] {
-    let len = CA_CODE_LENGTH as f64;
-    let finite = lag_chips.is_finite() && start_chip_a.is_finite();
-    if !(finite && doppler_offsets_hz.iter().all(|f| f.is_finite())) {
+    let (Some((n, u)), Some((first, frac))) = (split_chips(lag_chips), split_chips(start_chip_a))
+    else {
+        return [0.0; D];
+    };
+    if !doppler_offsets_hz.iter().all(|f| f.is_finite()) {
         return [0.0; D];
     }
-    let lag = lag_chips - libm::floor(lag_chips / len) * len;
-    let n = libm::floor(lag) as usize % CA_CODE_LENGTH;
-    let u = (lag - libm::floor(lag)) as f32;
-    let start = start_chip_a - libm::floor(start_chip_a / len) * len;
-    let first = libm::floor(start) as usize % CA_CODE_LENGTH;
-    let frac = (start - libm::floor(start)) as f32;
-    let mut phasors = doppler_offsets_hz.map(|f| ChipPhasor::new(f, frac));
-    let (ca, cb) = (a.code_signs(), b.code_signs());
-    // chip indices of a, of b and of b's next chip, each wrapped by one comparison
-    let wrap = |i: usize| {
-        if i >= CA_CODE_LENGTH {
-            i - CA_CODE_LENGTH
-        } else {
-            i
-        }
-    };
-    let mut j = first;
-    let mut jb = wrap(first + n);
-    let mut jb1 = wrap(jb + 1);
-    for _ in 0..CA_CODE_LENGTH {
-        let x = f32::from(ca.get(j).copied().unwrap_or(1));
-        let y0 = f32::from(cb.get(jb).copied().unwrap_or(1));
-        let y1 = f32::from(cb.get(jb1).copied().unwrap_or(1));
-        let p = x * ((1.0 - u) * y0 + u * y1);
-        for ph in phasors.iter_mut() {
-            ph.add(p);
-        }
-        j = wrap(j + 1);
-        jb = jb1;
-        jb1 = wrap(jb1 + 1);
-    }
-    let scale = 1.0 / CA_CODE_LENGTH as f32;
-    phasors.map(|ph| (ph.sr * ph.sr + ph.si * ph.si) * scale * scale)
+    LagSums::new(a, b, n, first, frac, doppler_offsets_hz)
+        .fraction(n, u)
+        .unwrap_or([0.0; D])
 }
 
-/// The running sum `Σ p_k e^{jw(k + ½ − frac)}` of one Doppler offset, `w` per chip.
+/// A code phase or lag reduced modulo the code: whole chip `0 … 1022` and fraction `[0, 1)`;
+/// `None` when not finite.
+fn split_chips(chips: f64) -> Option<(usize, f32)> {
+    if !chips.is_finite() {
+        return None;
+    }
+    let len = CA_CODE_LENGTH as f64;
+    let c = chips - libm::floor(chips / len) * len;
+    let whole = libm::floor(c);
+    Some((whole as usize % CA_CODE_LENGTH, (c - whole) as f32))
+}
+
+/// Integer lags one pass over the codes sums: a lag grid of half-width up to one chip (the
+/// tracking channels' 0.25, an acquisition's 1023/N) touches at most four.
+const LAG_WINDOW: usize = 4;
+
+/// The complex sums `S(m) = Σ_k c_a(s + k) · c_b(s + k + m) · e^{jw(k + ½ − frac s)}` of
+/// [`LAG_WINDOW`] consecutive integer lags `m = n0, n0 + 1, …` at `D` Doppler offsets, from
+/// one pass over the codes. A fractional lag `n + u` is their interpolation,
+/// `R = ((1 − u) S(n) + u S(n + 1)) / 1023` (the module's model is linear in the replica's two
+/// chips), so a grid of lags costs one pass instead of one per lag.
+struct LagSums<const D: usize> {
+    /// First integer lag, chips.
+    n0: usize,
+    /// `(Re, Im)` of `S(n0 + l)` at each offset.
+    sums: [[(f32, f32); D]; LAG_WINDOW],
+}
+
+impl<const D: usize> LagSums<D> {
+    /// Sums lags `n0 …` over the code period starting at chip `first` of code `a` (chip
+    /// centres at `½ − frac`). Bounded: 1023 chips × `D` × [`LAG_WINDOW`].
+    fn new(a: Prn, b: Prn, n0: usize, first: usize, frac: f32, offsets_hz: [f32; D]) -> Self {
+        let mut phasors = offsets_hz.map(|f| ChipPhasor::new(f, frac));
+        let mut sums = [[(0.0f32, 0.0f32); D]; LAG_WINDOW];
+        let (ca, cb) = (a.code_signs(), b.code_signs());
+        // chip indices of a and of b at each lag, each wrapped by one comparison
+        let wrap = |i: usize| {
+            if i >= CA_CODE_LENGTH {
+                i - CA_CODE_LENGTH
+            } else {
+                i
+            }
+        };
+        let mut j = first % CA_CODE_LENGTH;
+        let mut jb = [0usize; LAG_WINDOW];
+        for (l, i) in jb.iter_mut().enumerate() {
+            *i = (j + n0 + l) % CA_CODE_LENGTH;
+        }
+        for _ in 0..CA_CODE_LENGTH {
+            let x = f32::from(ca.get(j).copied().unwrap_or(1));
+            let products = jb.map(|i| x * f32::from(cb.get(i).copied().unwrap_or(1)));
+            for (d, ph) in phasors.iter_mut().enumerate() {
+                for (lag, &p) in sums.iter_mut().zip(&products) {
+                    if let Some(s) = lag.get_mut(d) {
+                        s.0 += p * ph.pr;
+                        s.1 += p * ph.pi;
+                    }
+                }
+                ph.turn();
+            }
+            j = wrap(j + 1);
+            jb = jb.map(|i| wrap(i + 1));
+        }
+        Self { n0, sums }
+    }
+
+    /// `|R|²` at lag `n + u` for each offset; `None` when `n` and `n + 1` are not both in
+    /// the window.
+    fn fraction(&self, n: usize, u: f32) -> Option<[f32; D]> {
+        let l = (n + CA_CODE_LENGTH - self.n0 % CA_CODE_LENGTH) % CA_CODE_LENGTH;
+        let (s0, s1) = (self.sums.get(l)?, self.sums.get(l + 1)?);
+        let scale = 1.0 / CA_CODE_LENGTH as f32;
+        let mut out = [0.0f32; D];
+        for ((o, a), b) in out.iter_mut().zip(s0).zip(s1) {
+            let (re, im) = ((1.0 - u) * a.0 + u * b.0, (1.0 - u) * a.1 + u * b.1);
+            *o = (re * re + im * im) * scale * scale;
+        }
+        Some(out)
+    }
+}
+
+/// The phasor `e^{jw(k + ½ − frac)}` of one Doppler offset at chip `k`, `w` per chip.
 #[derive(Clone, Copy)]
 struct ChipPhasor {
     /// `cos w`, `sin w`.
@@ -130,9 +183,6 @@ struct ChipPhasor {
     /// The phasor at the current chip.
     pr: f32,
     pi: f32,
-    /// The sum so far.
-    sr: f32,
-    si: f32,
 }
 
 impl ChipPhasor {
@@ -145,15 +195,11 @@ impl ChipPhasor {
             ws: libm::sinf(w),
             pr: libm::cosf(p0),
             pi: libm::sinf(p0),
-            sr: 0.0,
-            si: 0.0,
         }
     }
 
-    /// Adds the chip product `p` and turns the phasor by one chip.
-    fn add(&mut self, p: f32) {
-        self.sr += p * self.pr;
-        self.si += p * self.pi;
+    /// Turns the phasor by one chip.
+    fn turn(&mut self) {
         let r = self.pr * self.wc - self.pi * self.ws;
         self.pi = self.pr * self.ws + self.pi * self.wc;
         self.pr = r;
@@ -220,7 +266,9 @@ pub struct CrossCorrelationVerdict {
     pub explained: bool,
 }
 
-/// The largest `|R|²` of `other` into the victim over the test's grid.
+/// The largest `|R|²` of `other` into the victim over the test's grid: one pass over the
+/// codes ([`LagSums`]) for all the grid's lags and Doppler offsets (two for a lag grid wider
+/// than the window).
 fn largest_fraction(victim: &SignalProbe, other: &SignalProbe, test: &CrossCorrelationTest) -> f32 {
     let tau_a = other.code_phase_at(victim.sample);
     let tau_b = victim.code_phase_chips;
@@ -231,10 +279,25 @@ fn largest_fraction(victim: &SignalProbe, other: &SignalProbe, test: &CrossCorre
     };
     let offset = other.doppler_hz - victim.doppler_hz;
     let offsets = GRID_DOPPLER_FRACTIONS.map(|df| offset + df * test.doppler_tolerance_hz);
+    let Some((first, frac)) = split_chips(start) else {
+        return 0.0;
+    };
+    if !offsets.iter().all(|f| f.is_finite()) {
+        return 0.0;
+    }
+    let mut window: Option<LagSums<{ GRID_DOPPLER_FRACTIONS.len() }>> = None;
     let mut best = 0.0f32;
     for &dl in &GRID_LAG_FRACTIONS {
-        let lag = tau_b - tau_a + dl * test.lag_tolerance_chips;
-        for r in cross_correlations(other.prn, victim.prn, lag, start, offsets) {
+        let Some((n, u)) = split_chips(tau_b - tau_a + dl * test.lag_tolerance_chips) else {
+            continue;
+        };
+        let mut fraction = window.as_ref().and_then(|w| w.fraction(n, u));
+        if fraction.is_none() {
+            let w = LagSums::new(other.prn, victim.prn, n, first, frac, offsets);
+            fraction = w.fraction(n, u);
+            window = Some(w);
+        }
+        for r in fraction.unwrap_or_default() {
             best = best.max(r);
         }
     }
@@ -367,6 +430,49 @@ mod tests {
             code_chips_per_sample: 1.023e6 / 2.6e6,
             doppler_hz: doppler,
             power,
+        }
+    }
+
+    /// The test's grid from one pass over the codes (a window of integer lags, interpolated)
+    /// equals its lags and offsets taken one at a time, bit for bit: a tracking grid, an
+    /// acquisition's (one chip wide), and grids across the code's wrap.
+    #[test]
+    fn the_grid_in_one_pass_equals_its_points_one_by_one() {
+        let cases = [
+            (100.2, 612.9, 0.25, true),
+            (1022.6, 0.3, 1023.0 / 1024.0, false),
+            (0.1, 1022.95, 0.25, false),
+            (511.0, 3.75, 1023.0 / 1024.0, true),
+        ];
+        for (tau_v, tau_o, tol, aligned) in cases {
+            let (victim, other) = (
+                probe(7, tau_v, 1000.0, 1.0),
+                probe(12, tau_o, 2210.0, 100.0),
+            );
+            let test = CrossCorrelationTest {
+                epoch_aligned: aligned,
+                lag_tolerance_chips: tol,
+                ..TEST
+            };
+            let tau_a = other.code_phase_at(victim.sample);
+            let start = if aligned { tau_a - tau_v } else { tau_a };
+            let mut one_by_one = 0.0f32;
+            for dl in GRID_LAG_FRACTIONS {
+                for df in GRID_DOPPLER_FRACTIONS {
+                    let offset =
+                        other.doppler_hz - victim.doppler_hz + df * TEST.doppler_tolerance_hz;
+                    let lag = tau_v - tau_a + dl * tol;
+                    let r = code_cross_correlation(other.prn, victim.prn, lag, start, offset);
+                    one_by_one = one_by_one.max(r);
+                }
+            }
+            let grid = largest_fraction(&victim, &other, &test);
+            assert!(grid > 0.0);
+            assert_eq!(
+                grid.to_bits(),
+                one_by_one.to_bits(),
+                "{tau_v} {tau_o} {tol}: {grid} vs {one_by_one}"
+            );
         }
     }
 
