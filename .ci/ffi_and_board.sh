@@ -29,8 +29,16 @@ echo "--- C header: checked in = fresh cbindgen generation"
 cargo run -q -p gnss-attitude-ffi-header -- --check
 
 echo "--- FFI: host tests (mirrors round trip; the C example built with cc and compared with Rust)"
-cargo test -q -p gnss-attitude-ffi 2>&1 | grep -E '^(test result|running|test )' || true
-cargo test -q -p gnss-attitude-ffi >/dev/null
+# (one run: its summary here, its status checked, the C example's quaternion kept for below)
+set +e
+cargo test -q -p gnss-attitude-ffi -- --nocapture > "$ROOT/target/ci/ffi-host-tests.log" 2>&1
+ffi_status=$?
+set -e
+grep -E '^(test result|running|test )' "$ROOT/target/ci/ffi-host-tests.log" || true
+if [ "$ffi_status" != 0 ]; then
+  tail -30 "$ROOT/target/ci/ffi-host-tests.log"
+  echo "FAIL: the FFI host tests exited with $ffi_status"; exit 1
+fi
 
 echo "--- FFI: thumbv7em-none-eabihf static library (profile ffi: fat LTO, panic = abort)"
 RUSTC=/usr/bin/rustc CARGO_TARGET_DIR=$THUMB cargo build -q -p gnss-attitude-ffi --profile ffi \
@@ -46,10 +54,10 @@ ELF=$ROOT/target/ci/c-scenario.elf
   "${LINK[@]}" -o "$ROOT/target/ci/c-scenario-wrong.elf" 2> >(grep -v -E 'GNU-stack|deprecated' >&2)
 
 echo "--- FFI panic-never: the C example links only if no panic path survives in the calls it uses"
-RUSTC=/usr/bin/rustc CARGO_TARGET_DIR=$THUMB/panic-never cargo build -q -p gnss-attitude-ffi --profile ffi \
+# (same target directory: only the FFI crate is rebuilt; its library replaces the one linked above)
+RUSTC=/usr/bin/rustc CARGO_TARGET_DIR=$THUMB cargo build -q -p gnss-attitude-ffi --profile ffi \
   --target thumbv7em-none-eabihf -Zbuild-std=core --features panic-never
-"${ARM[@]}" examples/c/scenario.c examples/c/qemu/startup.c \
-  "$THUMB/panic-never/thumbv7em-none-eabihf/ffi/libgnss_attitude_ffi.a" "${LINK[@]}" \
+"${ARM[@]}" examples/c/scenario.c examples/c/qemu/startup.c "$LIB" "${LINK[@]}" \
   -o "$ROOT/target/ci/c-scenario-panic-never.elf" 2> >(grep -v -E 'GNU-stack|deprecated' >&2)
 echo "panic-never (FFI): linked"
 
@@ -67,7 +75,7 @@ if [ "$status" != 0 ] || ! grep -q 'c example: PASS' "$ROOT/target/ci/c-qemu.log
 fi
 if [ "$wrong" = 0 ]; then echo "FAIL: the C example accepted a wrong tolerance"; exit 1; fi
 echo "ok: a 1e-6 degree tolerance fails the C example (exit $wrong)"
-host_q=$(cargo test -q -p gnss-attitude-ffi --test c_example -- --nocapture 2>/dev/null | sed -n 's/^attitude: epoch [0-9]* q \([^s]*\)source.*/\1/p')
+host_q=$(sed -n 's/^attitude: epoch [0-9]* q \([^s]*\)source.*/\1/p' "$ROOT/target/ci/ffi-host-tests.log")
 qemu_q=$(sed -n 's/^attitude: epoch [0-9]* q \([^s]*\)source.*/\1/p' "$ROOT/target/ci/c-qemu.log")
 echo "  quaternion host: $host_q"
 echo "  quaternion qemu: $qemu_q"

@@ -125,15 +125,18 @@ impl<const D: usize> LagSums<D> {
     /// Sums lags `n0 …` over the code period starting at chip `first` of code `a` (chip
     /// centres at `½ − frac`). Bounded: 1023 chips × `D` × [`LAG_WINDOW`].
     fn new(a: Prn, b: Prn, n0: usize, first: usize, frac: f32, offsets_hz: [f32; D]) -> Self {
+        let n0 = n0 % CA_CODE_LENGTH;
         let mut phasors = offsets_hz.map(|f| ChipPhasor::new(f, frac));
         let mut sums = [[(0.0f32, 0.0f32); D]; LAG_WINDOW];
         let (ca, cb) = (a.code_signs(), b.code_signs());
-        // chip indices of a and of b at each lag, each wrapped by one comparison
-        let wrap = |i: usize| {
-            if i >= CA_CODE_LENGTH {
-                i - CA_CODE_LENGTH
+        // the next chip index, wrapped by one comparison (indices stay below 1023; wrapping
+        // arithmetic, so that no overflow check is left for the optimizer to discharge)
+        let next = |i: usize| {
+            let n = i.wrapping_add(1);
+            if n >= CA_CODE_LENGTH {
+                n.wrapping_sub(CA_CODE_LENGTH)
             } else {
-                i
+                n
             }
         };
         let mut j = first % CA_CODE_LENGTH;
@@ -153,8 +156,8 @@ impl<const D: usize> LagSums<D> {
                 }
                 ph.turn();
             }
-            j = wrap(j + 1);
-            jb = jb.map(|i| wrap(i + 1));
+            j = next(j);
+            jb = jb.map(next);
         }
         Self { n0, sums }
     }
@@ -162,7 +165,8 @@ impl<const D: usize> LagSums<D> {
     /// `|R|²` at lag `n + u` for each offset; `None` when `n` and `n + 1` are not both in
     /// the window.
     fn fraction(&self, n: usize, u: f32) -> Option<[f32; D]> {
-        let l = (n + CA_CODE_LENGTH - self.n0 % CA_CODE_LENGTH) % CA_CODE_LENGTH;
+        // (n0 < 1023 from `new`)
+        let l = (n % CA_CODE_LENGTH + CA_CODE_LENGTH - self.n0 % CA_CODE_LENGTH) % CA_CODE_LENGTH;
         let (s0, s1) = (self.sums.get(l)?, self.sums.get(l + 1)?);
         let scale = 1.0 / CA_CODE_LENGTH as f32;
         let mut out = [0.0f32; D];
