@@ -10,7 +10,7 @@ use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, SampleFrontConfig, SampleReceiver, SampleReport};
 use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneError};
 use gnss_attitude::signal::nco::CodeNco;
-use gnss_attitude::signal::{BitSettings, Prn, CA_CHIP_RATE_HZ};
+use gnss_attitude::signal::{BitSettings, Prn, SlaveTaps, CA_CHIP_RATE_HZ};
 
 use super::frontend::{FrontEnd, SM2IQ};
 use super::memory;
@@ -80,6 +80,7 @@ pub fn front_config() -> SampleFrontConfig {
     c.acquisition.doppler_max_hz = 2500.0;
     c.acquisition.noncoherent_ms = ACQUISITION_MS;
     c.acquisition.false_alarm_probability = 1e-3;
+    c.channel.slave_taps = SlaveTaps::Prompt;
     c
 }
 
