@@ -215,12 +215,95 @@ pub(crate) fn fill(out: &mut [CarrierWords], levels: CarrierLevels, phase: u32, 
 fn fill_levels<const L3: bool>(out: &mut [CarrierWords], phase: u32, st: &CarrierStep) {
     let bits = if L3 { 3 } else { 2 };
     let c = Crossings::new(st.mag, bits);
+    if st.slow != 0 && c.h >= WORD_BITS {
+        return fill_sparse::<L3>(out, phase, st, &c);
+    }
     match c.per_word() {
         0..=1 => fill_with::<L3, 1>(out, phase, st, &c),
         2 => fill_with::<L3, 2>(out, phase, st, &c),
         3..=4 => fill_with::<L3, 4>(out, phase, st, &c),
         5..=8 => fill_with::<L3, 8>(out, phase, st, &c),
         _ => fill_with::<L3, 32>(out, phase, st, &c),
+    }
+}
+
+/// The carrier words of the slow ramp's index planes (bit 0 first; the octant of `φ + 1/16`
+/// for the 3-level replica, the quadrant of `φ` for the 2-level one, whose third plane is
+/// unused), rotated by the step's whole quarter cycles.
+#[inline(always)]
+fn words_of_index<const L3: bool>(o0: u32, o1: u32, o2: u32, st: &CarrierStep) -> CarrierWords {
+    if L3 {
+        let (o2, o1) = rotate(o2, o1, st);
+        CarrierWords {
+            c: o2 ^ (o1 & o0),
+            s: o2,
+            d: 0,
+            nzc: !o1 | o0,
+            nzs: o1 | o0,
+        }
+    } else {
+        let (q1, q0) = rotate(o1, o0, st);
+        CarrierWords {
+            c: q1 ^ q0,
+            s: q1,
+            d: q0,
+            nzc: u32::MAX,
+            nzs: u32::MAX,
+        }
+    }
+}
+
+/// Samples per word.
+const WORD_BITS: u32 = 32;
+
+/// The slow ramp's index crossings carried from word to word, for slow steps of at least a
+/// word between crossings (`h ≥ 32`: at most one per word, the LEO case: within `f_s/128` of a
+/// multiple of `f_s/4` for the 2-level replica). Instead of finding each word's first crossing
+/// anew (a division per word), the next crossing's sample and its position past the boundary
+/// are kept, as [`index_up`] keeps them within a word. A negative slow step ramps `¬ψ` up
+/// (`¬ψ_k = ¬ψ₀ + k·|δ_s|` exactly), whose index is the complement of `ψ`'s. Equal to
+/// [`fill_with`] bit for bit.
+#[inline(always)]
+fn fill_sparse<const L3: bool>(
+    out: &mut [CarrierWords],
+    phase: u32,
+    st: &CarrierStep,
+    c: &Crossings,
+) {
+    let bits = if L3 { 3 } else { 2 };
+    let unit = 1u32 << (32 - bits);
+    let offset = if L3 { 1u32 << 28 } else { 0 };
+    let psi = phase.wrapping_add(offset);
+    // the index planes are complemented for a falling ramp
+    let (psi, invert) = if st.slow > 0 {
+        (psi, 0)
+    } else {
+        (!psi, u32::MAX)
+    };
+    let r = psi & (unit - 1);
+    let mut index = psi >> (32 - bits);
+    // Samples from the word's start to the next crossing, and its position past the boundary
+    // (in [0, d)), as in `index_up`: k·d ≤ unit − 1 − r + d, no wrap.
+    let mut k = (unit - 1 - r) / c.d + 1;
+    let mut e = r.wrapping_add(k.wrapping_mul(c.d)).wrapping_sub(unit);
+    // Samples between crossings: h or h + 1 (`c.h` is capped at a word's reach).
+    let h = unit / c.d;
+    for w in out.iter_mut() {
+        // the word's index planes: the index, and the next one from the crossing on
+        let mask = above(k);
+        let flips = index ^ index.wrapping_add(1);
+        let plane = |j: u32| spread(index, j) ^ (mask & spread(flips, j)) ^ invert;
+        let (o0, o1, o2) = (plane(0), plane(1), plane(2));
+        if k < WORD_BITS {
+            index = index.wrapping_add(1);
+            let bump = u32::from(e < c.rem);
+            e = e.wrapping_sub(c.rem).wrapping_add(bump.wrapping_mul(c.d));
+            // (k < 32, h ≤ 2³⁰: no wrap)
+            k = k.wrapping_add(h).wrapping_add(bump);
+        }
+        // (k ≥ 32 here: a crossing moved it on by h ≥ 32)
+        k = k.wrapping_sub(WORD_BITS);
+        *w = words_of_index::<L3>(o0, o1, o2, st);
     }
 }
 
@@ -237,24 +320,10 @@ fn fill_with<const L3: bool, const T: usize>(
         *w = if L3 {
             // Octant of φ + 1/16.
             let [o0, o1, o2] = index_planes::<3, T>(psi.wrapping_add(1 << 28), st, c);
-            let (o2, o1) = rotate(o2, o1, st);
-            CarrierWords {
-                c: o2 ^ (o1 & o0),
-                s: o2,
-                d: 0,
-                nzc: !o1 | o0,
-                nzs: o1 | o0,
-            }
+            words_of_index::<true>(o0, o1, o2, st)
         } else {
             let [q0, q1, _] = index_planes::<2, T>(psi, st, c);
-            let (q1, q0) = rotate(q1, q0, st);
-            CarrierWords {
-                c: q1 ^ q0,
-                s: q1,
-                d: q0,
-                nzc: u32::MAX,
-                nzs: u32::MAX,
-            }
+            words_of_index::<false>(q0, q1, 0, st)
         };
         psi = psi.wrapping_add(adv);
     }
@@ -285,8 +354,8 @@ mod tests {
 
     fn check(step: u32, phase: u32, words: usize) {
         let st = CarrierStep::new(step);
-        let mut two = [CarrierWords::default(); 8];
-        let mut three = [CarrierWords::default(); 8];
+        let mut two = [CarrierWords::default(); 30];
+        let mut three = [CarrierWords::default(); 30];
         fill(&mut two[..words], CarrierLevels::Two, phase, &st);
         fill(&mut three[..words], CarrierLevels::Three, phase, &st);
         for w in 0..words {
@@ -345,11 +414,27 @@ mod tests {
             check(step, u32::MAX, 3);
             check(step, 1 << 31, 3);
         }
+        // Slow steps over a whole chunk: crossings carried from word to word (at and near the
+        // boundary of one crossing per word, h = 32, for both index units; a crossing on a
+        // word's first sample), rising and falling.
+        for base in [1u32 << 25, 1 << 24, 1 << 20, 12_345, 1] {
+            for delta in [0u32, 1, 2] {
+                for step in [base.saturating_sub(delta).max(1), base + delta] {
+                    for _ in 0..20 {
+                        check(step, next(), 30);
+                        check(step.wrapping_neg(), next(), 30);
+                    }
+                    check(step, 0u32.wrapping_sub(step.wrapping_mul(32)), 30);
+                    check(step.wrapping_neg(), step.wrapping_mul(32), 30);
+                }
+            }
+        }
         for _ in 0..3000 {
             let step = next();
             let small = (next() as i32 >> (next() % 30)) as u32;
             check(step, next(), 2);
             check(small, next(), 2);
+            check(small, next(), 30);
         }
     }
 }
