@@ -155,7 +155,10 @@ impl<const S: usize, const N: usize> SampleReceiver<S, N> {
 
 impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     /// A receiver with no channels, whose channels run the correlator `C` with the front-end
-    /// `settings` (a [`BitSettings`](crate::signal::BitSettings) for bit planes).
+    /// `settings` (a [`BitSettings`](crate::signal::BitSettings) for bit planes). The
+    /// acquisition engine's FFT tables are built by the first [`Self::search`] (about 1000
+    /// `f64` sines and cosines: software on the M4F), so that construction keeps no second
+    /// copy of the engine on the stack.
     ///
     /// # Errors
     /// As [`SampleReceiver::new`]; also for settings the correlator refuses.
@@ -164,18 +167,24 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         config: SampleFrontConfig,
         settings: C::Settings,
     ) -> Result<Self, ReceiverError> {
-        let acquisition = Acquisition::<N>::new().map_err(ConfigError::from)?;
+        // The engine's 40 KB are made in place, blank, and built by the first search: a
+        // built engine returned by value would leave a copy in this frame (on a
+        // microcontroller's stack, beside the receiver being returned).
+        Acquisition::<N>::check_size().map_err(ConfigError::from)?;
         // the channel configuration is validated by a trial channel
         Channel::<3, C>::with_settings(Prn::FIRST, &config.channel, &settings)
             .map_err(ConfigError::from)?;
+        let adapter = ObservationAdapter::new(config.adapter).map_err(ConfigError::Adapter)?;
+        let clock = EpochClock::new(config.epoch_origin_sample, config.samples_per_epoch)
+            .map_err(ConfigError::Adapter)?;
+        let receiver = AttitudeReceiver::new(receiver)?;
         Ok(Self {
             settings,
-            adapter: ObservationAdapter::new(config.adapter).map_err(ConfigError::Adapter)?,
-            clock: EpochClock::new(config.epoch_origin_sample, config.samples_per_epoch)
-                .map_err(ConfigError::Adapter)?,
-            receiver: AttitudeReceiver::new(receiver)?,
+            adapter,
+            clock,
+            receiver,
             config,
-            acquisition,
+            acquisition: Acquisition::blank(),
             channels: Vec::new(),
             scratch: C::Scratch::default(),
             frontier: None,
@@ -231,6 +240,8 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         first_sample: u64,
     ) -> Result<SearchResult, ReceiverError> {
         let config = self.config.acquisition;
+        // (built at the first search: see `with_settings`)
+        self.acquisition.build()?;
         let report = self
             .acquisition
             .search_report(prn, i, q, first_sample, &config)?;

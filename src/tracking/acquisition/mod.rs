@@ -324,11 +324,33 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192 and `L`
     /// in 1–64 (the engine stays unbuilt).
     pub fn build(&mut self) -> Result<(), AcquisitionError> {
-        if !(1024..=8192).contains(&N) || !(1..=64).contains(&L) || !self.fft.build() {
+        Self::check_size()?;
+        if self.built {
+            return Ok(());
+        }
+        if !self.fft.build() {
             return Err(AcquisitionError::InvalidConfig);
         }
         self.built = true;
         Ok(())
+    }
+
+    /// Whether the engine's FFT tables are built (searches need them).
+    pub fn is_built(&self) -> bool {
+        self.built
+    }
+
+    /// Whether an engine of this size can be built, without building one.
+    ///
+    /// # Errors
+    /// [`AcquisitionError::InvalidConfig`] unless `N` is a power of two in 1024–8192 and `L`
+    /// in 1–64.
+    pub fn check_size() -> Result<(), AcquisitionError> {
+        if (1024..=8192).contains(&N) && N.is_power_of_two() && (1..=64).contains(&L) {
+            Ok(())
+        } else {
+            Err(AcquisitionError::InvalidConfig)
+        }
     }
 
     /// [`AcquisitionError::NotBuilt`] for a blank engine.
