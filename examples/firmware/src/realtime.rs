@@ -12,7 +12,8 @@
 //!    kHz, 6 ms non-coherent + the 6 ms dwell) on the reference antenna's first 12 ms; the
 //!    receiver gets the lines of sight as its aiding (every 100 ms) and the gyro's increments;
 //! 3. the receiver runs the bit-parallel correlators (`SampleReceiver<8, 1024,
-//!    BitCorrelator<3>>`, 1- or 2-bit planes, [`run::CARRIER`]) with its block and window
+//!    BitCorrelator<3>>`, 1- or 2-bit planes, [`run::CARRIER`]; E, P, L and N on the reference
+//!    antenna, the prompt on the other two) with its block and window
 //!    stages deferred (`set_deferred_stages`); warm-up until the attitude comes from the fine
 //!    filter, [`run::SETTLE_MS`] more, then [`run::COUNT_MS`] of blocks, each as three counted
 //!    regions: the bytes packed into the antennas' bit planes (`PlaneBuffer::pack_bytes`),
@@ -24,9 +25,9 @@
 //! Then flash, static RAM and the worst stack (painted at reset by cortex-m-rt's
 //! `paint-stack`, repainted after the construction and after the acquisition to measure each
 //! phase). Linked for QEMU's `mps2-an386` (feature `qemu-mps2`, 4 MiB RAM): the receiver's
-//! construction (`SampleReceiver::with_settings`, by value: its frame alone is 124 KB, the
-//! receiver 101 KB) does not fit an STM32F405's 128 KiB; the firmware prints what each phase
-//! needs against that target.
+//! construction (`SampleReceiver::with_settings`, by value: its frame is 53 KB, the receiver
+//! 78 KB) and the acquisition (62 KB of `i8` samples beside the receiver) do not fit an
+//! STM32F405's 128 KiB; the firmware prints what each phase needs against that target.
 #![no_std]
 #![no_main]
 

@@ -32,8 +32,11 @@
 //! index's bits XOR the masks `bits ≥ k_j` of the crossings that flip them. A negative slow
 //! step runs the same computation backwards from the word's last sample and reverses the bits.
 //! `T` is a compile-time constant per span (1, 2, 4, 8 or 32), so the word loop has no
-//! data-dependent branch. Exact: equal to the per-sample evaluation bit for bit (tests check
-//! it).
+//! data-dependent branch. When crossings are at least a word apart (`h ≥ 32`: within `f_s/128`
+//! of a multiple of `f_s/4` for the 2-level replica) the next crossing and its remainder are
+//! carried from word to word instead (no division per word), and a falling ramp is the
+//! complement of the rising `¬ψ_k = ¬ψ₀ + k·|δ_s|`. Exact: equal to the per-sample evaluation
+//! bit for bit (tests check it).
 
 /// Quantization levels of the carrier replica.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

@@ -74,7 +74,9 @@ fn count<R>(f: impl FnOnce() -> R) -> (u32, R) {
 
 /// The front half's configuration: complex 2.6 Msps, LEO channels, a warm search (Doppler
 /// within ±2.5 kHz, [`ACQUISITION_MS`] non-coherent: the flight computer knows the almanac, time and
-/// orbit), false alarms 10⁻³ per PRN search.
+/// orbit), false alarms 10⁻³ per PRN search; the slaved antennas prompt only (paper 003's
+/// filter needs no more of them; the adapter scales their prompts by the reference antenna's
+/// noise, equal to theirs behind a quantizer's AGC).
 pub fn front_config() -> SampleFrontConfig {
     let mut c = SampleFrontConfig::leo_complex(SAMPLE_RATE_HZ);
     c.acquisition.doppler_max_hz = 2500.0;
