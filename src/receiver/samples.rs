@@ -140,6 +140,12 @@ pub struct SampleReceiver<const S: usize, const N: usize, C: Correlate<3> = Corr
     receiver: AttitudeReceiver,
     /// First sample the channels have not seen.
     frontier: Option<u64>,
+    /// The channels' cross-correlation checks wait for [`Self::run_deferred`].
+    deferred_checks: bool,
+    /// A check is waiting (deferred mode).
+    checks_waiting: bool,
+    /// Checks that were still waiting when the next block came, and ran then.
+    check_overruns: u32,
 }
 
 impl<const S: usize, const N: usize> SampleReceiver<S, N> {
@@ -188,6 +194,9 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
             channels: Vec::new(),
             scratch: C::Scratch::default(),
             frontier: None,
+            deferred_checks: false,
+            checks_waiting: false,
+            check_overruns: 0,
         })
     }
 
@@ -436,16 +445,86 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         }
         let now = block.first_sample().saturating_add(block.len() as u64);
         self.frontier = Some(now);
-        let phantoms = self.check_cross_correlations();
+        report.cross_correlations = self.checks_now_or_deferred();
+        report.released = self.release_channels(now);
+        Ok(report)
+    }
+
+    /// Defers the channels' cross-correlation checks (`deferred` true) out of
+    /// [`Self::push_samples`] into [`Self::run_deferred`], as
+    /// [`AttitudeReceiver::set_deferred_stages`] defers the block and window stages: the
+    /// millisecond that ends the channels' lock windows then only notes that a check is
+    /// waiting (each check is a few hundred thousand instructions on the M4F, in one
+    /// millisecond). A check still waiting when the next block comes runs then (counted:
+    /// [`Self::check_overruns`]). `false` runs a waiting check now.
+    pub fn set_deferred_checks(&mut self, deferred: bool) {
+        self.deferred_checks = deferred;
+        if !deferred {
+            self.run_waiting_checks();
+        }
+    }
+
+    /// Runs what waits for the main loop: the channels' cross-correlation checks
+    /// ([`Self::set_deferred_checks`]) and the attitude receiver's stages
+    /// ([`AttitudeReceiver::run_deferred`]). The report counts the channels the checks
+    /// released (`released`, `cross_correlations`); its other fields are 0.
+    pub fn run_deferred(&mut self) -> SampleReport {
+        let report = self.run_waiting_checks();
+        self.receiver.run_deferred();
+        report
+    }
+
+    /// The waiting cross-correlation checks, and the channels they release.
+    fn run_waiting_checks(&mut self) -> SampleReport {
+        let mut report = SampleReport::default();
+        if self.checks_waiting {
+            self.checks_waiting = false;
+            report.cross_correlations = self.check_cross_correlations();
+            if report.cross_correlations > 0 {
+                let now = self.frontier.unwrap_or(0);
+                report.released = self.release_channels(now);
+            }
+        }
+        report
+    }
+
+    /// Cross-correlation checks that were still waiting when the next block came.
+    pub fn check_overruns(&self) -> u32 {
+        self.check_overruns
+    }
+
+    /// The end of a block: the channels' checks run now, or wait for [`Self::run_deferred`];
+    /// returns how many channels released themselves now.
+    fn checks_now_or_deferred(&mut self) -> u8 {
+        if self.checks_waiting {
+            // the main loop did not run them before this block: now (counted)
+            self.check_overruns = self.check_overruns.saturating_add(1);
+            self.checks_waiting = false;
+            return self.check_cross_correlations();
+        }
+        if self.deferred_checks {
+            self.checks_waiting = self.any_check_pending();
+            return 0;
+        }
+        self.check_cross_correlations()
+    }
+
+    /// Closes the channels without a locked epoch for `release_after_samples` before `now`
+    /// and those that released themselves as a cross-correlation; returns how many.
+    fn release_channels(&mut self, now: u64) -> u8 {
         let limit = self.config.release_after_samples;
         let before = self.channels.len();
         retain(&mut self.channels, |(c, s)| {
             now.saturating_sub(s.last_lock_sample) < limit && !c.is_cross_correlation()
         });
-        report.released =
-            u8::try_from(before.saturating_sub(self.channels.len())).unwrap_or(u8::MAX);
-        report.cross_correlations = phantoms;
-        Ok(report)
+        u8::try_from(before.saturating_sub(self.channels.len())).unwrap_or(u8::MAX)
+    }
+
+    /// Whether some channel's cross-correlation test is due.
+    fn any_check_pending(&self) -> bool {
+        self.channels
+            .iter()
+            .any(|(c, _)| c.cross_correlation_test_pending())
     }
 
     /// Every channel's cross-correlation check against the others
@@ -453,11 +532,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     /// The probes (f64 code phases: soft float on the M4F) are gathered only in the
     /// milliseconds in which some channel's test is due.
     fn check_cross_correlations(&mut self) -> u8 {
-        if !self
-            .channels
-            .iter()
-            .any(|(c, _)| c.cross_correlation_test_pending())
-        {
+        if !self.any_check_pending() {
             return 0;
         }
         let mut probes: Vec<SignalProbe, S> = Vec::new();
@@ -608,6 +683,61 @@ mod tests {
         assert_eq!(
             observed.channels().collect::<heapless::Vec<_, 2>>(),
             plain.channels().collect::<heapless::Vec<_, 2>>()
+        );
+    }
+
+    /// Deferred checks: the block that ends the channels' lock windows only notes that a
+    /// check waits, `run_deferred` runs it, and without that call the next block runs it (an
+    /// overrun, counted). Deferring changes nothing else: a twin receiver with the checks
+    /// inline sees the same epochs and ends in the same state.
+    #[test]
+    fn deferred_cross_correlation_checks_wait_for_the_main_loop_or_the_next_block() {
+        let mut deferred = front();
+        deferred.start(&detection(5)).expect("room");
+        deferred.start(&detection(9)).expect("room");
+        let mut inline = deferred.clone();
+        deferred.set_deferred_checks(true);
+        let zeros = [0i8; 1023];
+        let (mut ran_in_main_loop, mut waiting_before) = (0, false);
+        for k in 0..260u64 {
+            let block = SampleBlock::complex(k * 1023, [&zeros; 3], [&zeros; 3]).unwrap();
+            let overruns = deferred.check_overruns();
+            let a = deferred.push_samples(&block).expect("a continuing stream");
+            let b = inline.push_samples(&block).expect("a continuing stream");
+            assert_eq!(a.epochs, b.epochs, "block {k}");
+            assert!(
+                !inline.any_check_pending(),
+                "inline checks run in their block"
+            );
+            if waiting_before {
+                assert_eq!(deferred.check_overruns(), overruns + 1, "block {k}");
+            }
+            waiting_before = deferred.checks_waiting;
+            if deferred.checks_waiting {
+                assert!(
+                    deferred.any_check_pending(),
+                    "block {k}: the window is not judged yet"
+                );
+                if k < 150 {
+                    // the main loop's turn: the check runs there
+                    deferred.run_deferred();
+                    assert!(!deferred.any_check_pending() && !deferred.checks_waiting);
+                    ran_in_main_loop += 1;
+                    waiting_before = false;
+                }
+            }
+        }
+        assert!(
+            ran_in_main_loop >= 1,
+            "a lock window ended in the first 150 ms"
+        );
+        assert!(
+            deferred.check_overruns() >= 1,
+            "and one after them, left to the next block"
+        );
+        assert_eq!(
+            deferred.channels().collect::<heapless::Vec<_, 2>>(),
+            inline.channels().collect::<heapless::Vec<_, 2>>()
         );
     }
 }

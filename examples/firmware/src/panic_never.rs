@@ -548,11 +548,17 @@ fn sample_receiver() {
     });
     let _ = black_box(rx.start(&acq));
     let _ = black_box(rx.tracks(prn));
+    rx.set_deferred_checks(black_box(true));
     for first in [black_box(0u64), black_box(2600)] {
         if let Ok(block) = SampleBlock::complex(first, [si, si, si], [sq, sq, sq]) {
             let _ = black_box(rx.push_samples(black_box(&block)));
         }
+        if black_box(true) {
+            let _ = black_box(rx.run_deferred());
+        }
     }
+    rx.set_deferred_checks(black_box(false));
+    let _ = black_box(rx.check_overruns());
     for c in rx.channels() {
         let _ = black_box(c);
     }

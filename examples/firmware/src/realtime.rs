@@ -13,12 +13,13 @@
 //!    receiver gets the lines of sight as its aiding (every 100 ms) and the gyro's increments;
 //! 3. the receiver runs the bit-parallel correlators (`SampleReceiver<8, 1024,
 //!    BitCorrelator<3>>`, 1- or 2-bit planes, [`run::CARRIER`]; E, P, L and N on the reference
-//!    antenna, the prompt on the other two) with its block and window
-//!    stages deferred (`set_deferred_stages`); warm-up until the attitude comes from the fine
+//!    antenna, the prompt on the other two) with its block and window stages and its
+//!    channels' cross-correlation checks deferred (`set_deferred_stages`,
+//!    `set_deferred_checks`); warm-up until the attitude comes from the fine
 //!    filter, [`run::SETTLE_MS`] more, then [`run::COUNT_MS`] of blocks, each as three counted
 //!    regions: the bytes packed into the antennas' bit planes (`PlaneBuffer::pack_bytes`),
 //!    `push_samples` with the gyro increments that end in the block (the 1 ms path), and
-//!    `run_deferred`; the firmware prints which regions are that front end's, `.ci/run` sums
+//!    `SampleReceiver::run_deferred` (the main loop's work); the firmware prints which regions are that front end's, `.ci/run` sums
 //!    the plugin's counts into instructions per 1 ms, per stage;
 //! 4. the verdict: fine attitude within [`run::LIMIT_DEG`] of the truth, or exit failure.
 //!

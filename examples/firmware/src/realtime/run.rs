@@ -188,6 +188,7 @@ pub fn run(front_end: FrontEnd) -> Outcome {
     match made.as_mut() {
         Ok(rx) => {
             rx.receiver_mut().set_deferred_stages(true);
+            rx.set_deferred_checks(true);
             // the construction's high-water mark, then the stream's own
             let sp = memory::sp();
             let built = memory::stack_top() - sp + memory::used_below(sp);
@@ -282,22 +283,22 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
             }
             (refused, push_block(rx, first, planes))
         };
-        let deferred = |rx: &mut Front| rx.receiver_mut().run_deferred();
-        let (packed, (refused, report)) = if counting {
+        let deferred = |rx: &mut Front| rx.run_deferred();
+        let (packed, (refused, report), main_loop) = if counting {
             let (n, packed) = count(|| pack(&mut planes));
             let (_, r) = count(|| work(&mut *rx, &mut gyro_next, &planes));
-            let (m, _) = count(|| deferred(&mut *rx));
+            let (m, d) = count(|| deferred(&mut *rx));
             first_region.get_or_insert(n);
             last_region = m;
             out.counted_ms += BLOCK_MS as u64;
-            (packed, r)
+            (packed, r, d)
         } else {
             let packed = pack(&mut planes);
             let r = work(&mut *rx, &mut gyro_next, &planes);
-            deferred(&mut *rx);
-            (packed, r)
+            (packed, r, deferred(&mut *rx))
         };
         refusals += refused;
+        total.released += main_loop.released;
         let report = packed.and(report);
         match report {
             Ok(r) => {
@@ -350,7 +351,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         && refusals == 0;
     let cn0 = rx.channels().map(|c| c.cn0_dbhz).fold(0.0f32, |a, c| a + c) / rx.channels().count().max(1) as f32;
     hprintln!(
-        "realtime {}: {} of {} satellites acquired, {} channels locked (mean C/N0 {} dB-Hz), {} observations, {} late, {} without aiding, {} channels released, {} deferred overruns, {} calls refused",
+        "realtime {}: {} of {} satellites acquired, {} channels locked (mean C/N0 {} dB-Hz), {} observations, {} late, {} without aiding, {} channels released, {} deferred overruns ({} of the checks), {} calls refused",
         front_end.name(),
         detected,
         SKY.len(),
@@ -361,6 +362,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         total.without_aiding,
         total.released,
         rx.receiver().deferred_overruns(),
+        rx.check_overruns(),
         refusals
     );
     out
