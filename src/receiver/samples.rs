@@ -16,6 +16,13 @@
 //! ([`SampleReceiver::receiver_mut`]). The channels run one 1 ms slice at a time in turn, so
 //! the observations reach the receiver in epoch order whatever the block size.
 //!
+//! On a microcontroller `push_samples` is the 1 ms path (the DMA block's interrupt, say): its
+//! occasional heavy work can wait for the main loop. The attitude receiver's block and window
+//! stages ([`AttitudeReceiver::set_deferred_stages`]) and the channels' cross-correlation
+//! checks ([`SampleReceiver::set_deferred_checks`]) then run in
+//! [`SampleReceiver::run_deferred`]; work still waiting when the next block comes runs then,
+//! counted.
+//!
 //! The channels run the correlator `C` ([`Correlate`]), and [`SampleReceiver::push_samples`]
 //! takes its block: decoded `i8` samples ([`SampleBlock`](crate::signal::SampleBlock)) for
 //! the default [`Correlator`], bit planes ([`BitBlock`](crate::signal::bitwise::BitBlock),
