@@ -19,8 +19,9 @@
 //!    filter, [`run::SETTLE_MS`] more, then [`run::COUNT_MS`] of blocks, each as three counted
 //!    regions: the bytes packed into the antennas' bit planes (`PlaneBuffer::pack_bytes`),
 //!    `push_samples` with the gyro increments that end in the block (the 1 ms path), and
-//!    `SampleReceiver::run_deferred` (the main loop's work); the firmware prints which regions are that front end's, `.ci/run` sums
-//!    the plugin's counts into instructions per 1 ms, per stage;
+//!    `SampleReceiver::run_deferred` (the main loop's work); the firmware prints which
+//!    regions are that front end's, `.ci/run` sums the plugin's counts into instructions per
+//!    1 ms, per stage;
 //! 4. the verdict: fine attitude within [`run::LIMIT_DEG`] of the truth, or exit failure.
 //!
 //! Then flash, static RAM and the worst stack (painted at reset by cortex-m-rt's

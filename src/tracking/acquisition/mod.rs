@@ -335,11 +335,6 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         Ok(())
     }
 
-    /// Whether the engine's FFT tables are built (searches need them).
-    pub fn is_built(&self) -> bool {
-        self.built
-    }
-
     /// Whether an engine of this size can be built, without building one.
     ///
     /// # Errors
