@@ -14,6 +14,7 @@ use gnss_attitude::signal::bitwise::{
     BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneFormat, Resolution,
 };
 use gnss_attitude::signal::{BitSettings, Prn, SampleFormat};
+use gnss_attitude::tracking::SearchSamples;
 use host_sim::synth::quantize::encode;
 use host_sim::synth::{AttitudeMotion, FrontEnd, Satellite, Scene};
 use nalgebra::{Matrix3, Vector3};
@@ -85,7 +86,6 @@ fn fly(settings: BitSettings, seconds: f64) -> (AttitudeSource, f64, usize) {
     let mut planes: Vec<Box<PlaneBuffer<WORDS>>> = (0..3)
         .map(|_| Box::new(PlaneBuffer::new(settings.format)))
         .collect();
-    let (mut i, mut q) = (vec![0i8; needed], vec![0i8; needed]);
     let blocks = (seconds * FS / BLOCK as f64).ceil() as u64;
     let mut observations = 0;
     for b in 0..blocks {
@@ -94,13 +94,13 @@ fn fly(settings: BitSettings, seconds: f64) -> (AttitudeSource, f64, usize) {
         for (p, bytes) in planes.iter_mut().zip(&bytes) {
             assert_eq!(p.pack_bytes(sm2iq, bytes, 0).unwrap(), BLOCK);
         }
-        // Searches on the first block: the reference antenna's planes unpacked to i8.
+        // Searches on the first block: the reference antenna's planes as they are.
         if b == 0 {
-            let n = planes[0].planes().unpack_i8(0, &mut i, &mut q);
-            assert_eq!(n, needed);
+            let reference = SearchSamples::Planes(planes[0].planes().head(needed));
+            assert_eq!(reference.len(), needed);
             for a in flight.aiding(0) {
                 let r = rx
-                    .search(Prn::new(a.prn).unwrap(), &i, Some(&q), first)
+                    .search_samples(Prn::new(a.prn).unwrap(), reference, first)
                     .unwrap();
                 assert!(r.detected, "PRN {} not detected", a.prn);
             }

@@ -17,7 +17,7 @@ use gnss_attitude::signal::{Prn, SampleBlock, SampleFormat};
 use gnss_attitude::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
 use gnss_attitude::tracking::{
     Acquisition, AcquisitionConfig, CancellationCheck, Channel, ChannelConfig, CrossCheck,
-    KnownSignal, SearchReport, SearchResult, TrackingEpoch,
+    KnownSignal, SearchReport, SearchResult, SearchSamples, TrackingEpoch,
 };
 use rayon::prelude::*;
 
@@ -417,7 +417,12 @@ pub fn search_reports(
             |engine, &p| -> Result<SearchReport> {
                 let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
                 let prn = Prn::new(p).with_context(|| format!("PRN {p} out of range 1-32"))?;
-                Ok(engine.search_report(prn, i, q, first_sample, config)?)
+                Ok(engine.search_report(
+                    prn,
+                    SearchSamples::decoded(i, q)?,
+                    first_sample,
+                    config,
+                )?)
             },
         )
         .collect()
@@ -510,14 +515,14 @@ pub fn second_look(
             || Acquisition::<2048>::new().map(Box::new),
             |engine, &(prn, first_threshold)| -> Result<SecondLook> {
                 let engine = engine.as_mut().map_err(|e| anyhow::anyhow!("{e}"))?;
+                let samples = SearchSamples::decoded(i, q)?;
                 let report =
-                    engine.search_report_cancelling(prn, i, q, first_sample, config, known)?;
+                    engine.search_report_cancelling(prn, samples, first_sample, config, known)?;
                 let check = if report.result.detected {
                     Some(engine.cancellation_check(
                         &report.result,
                         known,
-                        i,
-                        q,
+                        samples,
                         config,
                         CANCELLATION_KEEP_FRACTION,
                     )?)
@@ -572,7 +577,8 @@ pub fn detect_prns(
             .copied()
             .chain(accepted.iter().map(KnownSignal::from))
             .collect();
-        let check = engine.cross_check(&r, &known, i, q, config, margin)?;
+        let check =
+            engine.cross_check(&r, &known, SearchSamples::decoded(i, q)?, config, margin)?;
         if check.explained {
             rejected.push(CrossCorrelationRejection { result: r, check });
         } else {

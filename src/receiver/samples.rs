@@ -28,12 +28,13 @@
 //! the default [`Correlator`], bit planes ([`BitBlock`](crate::signal::bitwise::BitBlock),
 //! packed from the front end's bytes by
 //! [`PlaneBuffer::pack_bytes`](crate::signal::bitwise::PlaneBuffer::pack_bytes)) for the
-//! bit-parallel correlator ([`SampleReceiver::with_settings`]). The search always runs on
-//! `i8` samples of the reference antenna: with bit planes the caller decodes the search's few
-//! milliseconds from the same bytes ([`SampleFormat::decode`](crate::signal::SampleFormat::decode))
-//! or unpacks its planes
-//! ([`AntennaPlanes::unpack_i8`](crate::signal::bitwise::AntennaPlanes::unpack_i8)), once per
-//! search (20 ms at 2.6 Msps: 52 k samples, a 104 KiB `i8` buffer).
+//! bit-parallel correlator ([`SampleReceiver::with_settings`]). The search reads the
+//! reference antenna's samples decoded ([`SampleReceiver::search`]) or as bit planes
+//! ([`SampleReceiver::search_samples`] with
+//! [`SearchSamples::Planes`], collected block by block
+//! with [`PlaneBuffer::append`](crate::signal::bitwise::PlaneBuffer::append)): the 13 ms of a
+//! 6 ms search and its dwell at 2.6 Msps take 62 KiB as `i8`, 7.6 / 15.2 KiB as 1- / 2-bit
+//! complex planes.
 
 use heapless::Vec;
 
@@ -42,7 +43,9 @@ use super::{AttitudeReceiver, ReceiverAttitude, ReceiverConfig};
 use crate::receiver::ReceiverError;
 use crate::receiver::{AdapterConfig, EpochClock, ObservationAdapter};
 use crate::signal::{Correlate, CorrelationBlock, Correlator, Prn};
-use crate::tracking::acquisition::{CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN};
+use crate::tracking::acquisition::{
+    SearchSamples, CANCELLATION_KEEP_FRACTION, CROSS_CORRELATION_MARGIN,
+};
 use crate::tracking::xcorr::SignalProbe;
 use crate::tracking::{
     Acquisition, AcquisitionConfig, Channel, ChannelConfig, ChannelState, KnownSignal,
@@ -191,7 +194,21 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         let clock = EpochClock::new(config.epoch_origin_sample, config.samples_per_epoch)
             .map_err(ConfigError::Adapter)?;
         let receiver = AttitudeReceiver::new(receiver)?;
-        Ok(Self {
+        Ok(Self::assemble(settings, adapter, clock, receiver, config))
+    }
+
+    /// The receiver of validated parts, channels none, the acquisition engine blank. Out of
+    /// line, so that the caller's `Ok` takes the value where it is made (the engine's 40 KB
+    /// are not built in one frame and copied to another).
+    #[inline(never)]
+    fn assemble(
+        settings: C::Settings,
+        adapter: ObservationAdapter,
+        clock: EpochClock,
+        receiver: AttitudeReceiver,
+        config: SampleFrontConfig,
+    ) -> Self {
+        Self {
             settings,
             adapter,
             clock,
@@ -204,7 +221,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
             deferred_checks: false,
             checks_waiting: false,
             check_overruns: 0,
-        })
+        }
     }
 
     /// The attitude receiver (estimates, health, events).
@@ -255,12 +272,28 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         q: Option<&[i8]>,
         first_sample: u64,
     ) -> Result<SearchResult, ReceiverError> {
+        let samples = SearchSamples::decoded(i, q)?;
+        self.search_samples(prn, samples, first_sample)
+    }
+
+    /// [`Self::search`] on `samples`: decoded, or the bit planes of a 1- or 2-bit front end
+    /// (a microcontroller keeps the search's milliseconds packed: 8 to 16 times less memory
+    /// than `i8`).
+    ///
+    /// # Errors
+    /// As [`Self::search`].
+    pub fn search_samples(
+        &mut self,
+        prn: Prn,
+        samples: SearchSamples<'_>,
+        first_sample: u64,
+    ) -> Result<SearchResult, ReceiverError> {
         let config = self.config.acquisition;
         // (built at the first search: see `with_settings`)
         self.acquisition.build()?;
         let report = self
             .acquisition
-            .search_report(prn, i, q, first_sample, &config)?;
+            .search_report(prn, samples, first_sample, &config)?;
         let mut result = report.result;
         if self.tracks(prn) {
             return Ok(result);
@@ -284,8 +317,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
             let check = self.acquisition.cross_check(
                 &result,
                 &known,
-                i,
-                q,
+                samples,
                 &config,
                 CROSS_CORRELATION_MARGIN,
             )?;
@@ -295,7 +327,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         // (Not when interference was found: it makes a background of its own.)
         if !result.detected && masked && !report.interference && !known.is_empty() {
             result = self
-                .second_look(prn, i, q, first_sample, &known, report.result.threshold)?
+                .second_look(prn, samples, first_sample, &known, report.result.threshold)?
                 .unwrap_or(result);
         }
         if result.detected {
@@ -312,24 +344,26 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     fn second_look(
         &mut self,
         prn: Prn,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         first_sample: u64,
         known: &[KnownSignal],
         first_threshold: f32,
     ) -> Result<Option<SearchResult>, ReceiverError> {
         let config = self.config.acquisition;
-        let again =
-            self.acquisition
-                .search_report_cancelling(prn, i, q, first_sample, &config, known)?;
+        let again = self.acquisition.search_report_cancelling(
+            prn,
+            samples,
+            first_sample,
+            &config,
+            known,
+        )?;
         if !again.result.detected || !(again.result.metric > first_threshold) {
             return Ok(None);
         }
         let check = self.acquisition.cancellation_check(
             &again.result,
             known,
-            i,
-            q,
+            samples,
             &config,
             CANCELLATION_KEEP_FRACTION,
         )?;

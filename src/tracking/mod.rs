@@ -25,6 +25,6 @@ pub mod xcorr;
 
 pub use acquisition::{
     Acquisition, AcquisitionConfig, AcquisitionError, CancellationCheck, CrossCheck, KnownSignal,
-    SearchReport, SearchResult, Verification,
+    SearchReport, SearchResult, SearchSamples, Verification,
 };
 pub use channel::{Channel, ChannelConfig, ChannelState, LockFlags, TrackingEpoch, TrackingError};

@@ -537,6 +537,24 @@ fn sample_receiver() {
     let sq: &[i8] = black_box(&sq[..]);
     let q = if black_box(true) { Some(sq) } else { None };
     let _ = black_box(rx.search(prn, si, q, black_box(0)));
+    // the search on bit planes, collected block by block (format and lengths opaque)
+    {
+        use gnss_attitude::signal::bitwise::{PlaneBuffer, PlaneFormat, Resolution};
+        use gnss_attitude::tracking::SearchSamples;
+        let format = PlaneFormat {
+            resolution: if black_box(true) { Resolution::TwoBit } else { Resolution::OneBit },
+            complex: black_box(true),
+        };
+        let mut block = PlaneBuffer::<82>::new(format);
+        let mut collected = PlaneBuffer::<164>::new(format);
+        for _ in 0..black_box(3) {
+            let _ = black_box(block.pack_i8(si, sq, black_box(2)));
+            let _ = black_box(collected.append(&block.planes()));
+        }
+        let samples = if black_box(true) { SearchSamples::Planes(collected.planes().head(black_box(5000))) } else { SearchSamples::Decoded { i: si, q } };
+        let _ = black_box(rx.search_samples(prn, black_box(samples), black_box(0)));
+        collected.clear();
+    }
     let acq: SearchResult = black_box(SearchResult {
         prn,
         detected: true,

@@ -67,6 +67,8 @@ fn main() -> ! {
     let mut all = true;
     let mut stacks = [0usize; 3];
     for front_end in FrontEnd::ALL {
+        // (each front end's stack measured alone: the previous run's marks painted over)
+        memory::paint_below();
         let o = run::run(front_end);
         hprintln!(
             "realtime {}: regions {}..={} count {} ms, 3 regions per ms (pack the bytes into planes; push_samples + gyro increments; run_deferred); fine from epoch {:?}; final attitude {:?}, error {} deg (limit {} deg): {}",

@@ -29,8 +29,9 @@
 //! [`Channel`](crate::tracking::Channel) or a
 //! [`SampleReceiver`](crate::receiver::SampleReceiver) runs on either (`with_settings` and a
 //! [`BitSettings`](super::BitSettings)), reading [`BitBlock`]s instead of
-//! [`SampleBlock`](super::SampleBlock)s; the acquisition search takes `i8` samples, which
-//! [`AntennaPlanes::unpack_i8`] gives from the planes.
+//! [`SampleBlock`](super::SampleBlock)s; the acquisition searches the reference antenna's
+//! planes as they are ([`SearchSamples::Planes`](crate::tracking::SearchSamples::Planes);
+//! [`PlaneBuffer::append`] collects the search's milliseconds block by block).
 //!
 //! # Word layout
 //! Sample `32·w + k` of a block is bit `k` of word `w` ([`planes`]). Per antenna there is a

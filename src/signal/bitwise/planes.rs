@@ -357,6 +357,55 @@ impl<const W: usize> PlaneBuffer<W> {
         Ok(n)
     }
 
+    /// Appends the samples of `planes` after the buffer's own (the planes of the same
+    /// format from another buffer: the milliseconds an acquisition searches, collected block
+    /// by block as the front end delivers them). Returns the number appended: all of them,
+    /// or as many as fit (the rest are dropped; the count says so). Bounded by the source's
+    /// words.
+    ///
+    /// # Errors
+    /// [`PlaneError::UnsupportedFormat`] when `planes` are of another format; the buffer is
+    /// then unchanged.
+    pub fn append(&mut self, planes: &AntennaPlanes<'_>) -> Result<usize, PlaneError> {
+        if planes.format() != self.format {
+            return Err(PlaneError::UnsupportedFormat);
+        }
+        let n = planes.len().min(self.capacity().saturating_sub(self.len));
+        let (w0, shift) = (self.len / WORD_SAMPLES, (self.len % WORD_SAMPLES) as u32);
+        let words = n.div_ceil(WORD_SAMPLES);
+        for (dst, src) in self.planes.iter_mut().zip(planes.words) {
+            // the bits from the first appended one on cleared (a cleared buffer's are stale)
+            for (w, d) in dst
+                .iter_mut()
+                .enumerate()
+                .skip(w0)
+                .take(words.saturating_add(1))
+            {
+                *d &= if w == w0 { (1u32 << shift) - 1 } else { 0 };
+            }
+            for (w, &x) in src.iter().enumerate().take(words) {
+                let x = x & Self::tail_mask(n, w);
+                if let Some(d) = dst.get_mut(w0.saturating_add(w)) {
+                    *d |= x << shift;
+                }
+                if let (Some(d), true) = (
+                    dst.get_mut(w0.saturating_add(w).saturating_add(1)),
+                    shift > 0,
+                ) {
+                    *d |= x >> (WORD_SAMPLES as u32 - shift);
+                }
+            }
+        }
+        // (at most the capacity: `n` is bounded by the room left)
+        self.len = self.len.saturating_add(n);
+        Ok(n)
+    }
+
+    /// Empties the buffer (its format kept).
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
     /// Packs decoded samples: sign bit `x < 0`, magnitude bit (2-bit) `|x| ≥ threshold`.
     /// `q` is read for complex planes only (it must then be at least as long as `i`). Packs
     /// `min(i.len(), capacity)` samples and returns the count.
@@ -637,6 +686,69 @@ mod tests {
             *b = (x >> 24) as u8;
         }
         out
+    }
+
+    /// Blocks of any length appended one after another (into a buffer cleared of stale
+    /// bits) hold what one packing of all their samples holds, up to the capacity.
+    #[test]
+    fn appended_blocks_equal_one_packing_of_their_samples() {
+        let format = PlaneFormat {
+            resolution: Resolution::TwoBit,
+            complex: true,
+        };
+        let bytes = pseudo_bytes(512, 7);
+        let mut i = [0i8; 1024];
+        let mut q = [0i8; 1024];
+        let fmt = SampleFormat::SignMagnitude2 { complex: true };
+        fmt.decode(&bytes, 0, &mut i, &mut q).unwrap();
+        for lengths in [
+            &[100usize, 37, 32, 1, 200][..],
+            &[64, 64, 31, 33],
+            &[300, 300, 300],
+        ] {
+            let mut whole = PlaneBuffer::<12>::new(format);
+            let mut appended = PlaneBuffer::<12>::new(format);
+            // stale bits everywhere first
+            appended.pack_i8(&[-3; 384], &[-3; 384], 2).unwrap();
+            appended.clear();
+            let mut from = 0;
+            for &n in lengths {
+                let mut block = PlaneBuffer::<10>::new(format);
+                block
+                    .pack_i8(&i[from..from + n], &q[from..from + n], 2)
+                    .unwrap();
+                let room = 384 - appended.len();
+                assert_eq!(appended.append(&block.planes()), Ok(n.min(room)));
+                from += n;
+            }
+            whole.pack_i8(&i[..from], &q[..from], 2).unwrap();
+            assert_eq!(appended.len(), whole.len());
+            let (a, w) = (appended.planes(), whole.planes());
+            for k in 0..whole.len() {
+                for quadrature in [false, true] {
+                    assert_eq!(
+                        a.value(k, quadrature),
+                        w.value(k, quadrature),
+                        "{lengths:?}: {k}"
+                    );
+                }
+            }
+            for (pa, pw) in [(a.sign_i(), w.sign_i()), (a.mag_q(), w.mag_q())] {
+                assert_eq!(
+                    pa, pw,
+                    "{lengths:?}: words, the bits after the last sample included"
+                );
+            }
+        }
+        let other = PlaneBuffer::<1>::new(PlaneFormat {
+            resolution: Resolution::OneBit,
+            complex: true,
+        });
+        let mut buffer = PlaneBuffer::<1>::new(format);
+        assert_eq!(
+            buffer.append(&other.planes()),
+            Err(PlaneError::UnsupportedFormat)
+        );
     }
 
     #[test]

@@ -22,7 +22,7 @@
 //! then its Doppler by the phase progression of the squared millisecond phasors (squared:
 //! a data-bit flip does not turn them; unambiguous within ±250 Hz).
 
-use super::{Acquisition, AcquisitionConfig, KnownSignal};
+use super::{Acquisition, AcquisitionConfig, KnownSignal, SearchSamples};
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, GPS_L1_HZ};
 use crate::signal::nco::{
     carrier_index, CarrierNco, CodeNco, CARRIER_AMPLITUDE, CODE_WRAP, COS_TABLE, SIN_TABLE,
@@ -115,29 +115,26 @@ impl Cancelled {
     pub(super) fn phasor(
         &self,
         m: usize,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> Complex {
-        let gain = if q.is_some() { 1.0 } else { 2.0 };
-        let dq = if q.is_some() { dc[1] } else { 0.0 };
+        let gain = if samples.is_complex() { 1.0 } else { 2.0 };
+        let dq = if samples.is_complex() { dc[1] } else { 0.0 };
         let (start, end) = (
             config.ms_start(m),
-            config.ms_start(m.saturating_add(1)).min(i.len()),
+            config.ms_start(m.saturating_add(1)).min(samples.len()),
         );
         let (mut carrier, mut code) = self.at(start);
         let (mut sr, mut si) = (0.0f32, 0.0f32);
-        for k in start..end {
-            let x = f32::from(i.get(k).copied().unwrap_or(0)) - dc[0];
-            let y = q.and_then(|q| q.get(k)).map_or(0.0, |v| f32::from(*v) - dq);
+        samples.for_each_centred(start..end, [dc[0], dq], |x, y| {
             let c = self.chip(code);
             let idx = carrier_index(carrier);
             let (cs, sn) = (f32::from(COS_TABLE[idx]) * c, f32::from(SIN_TABLE[idx]) * c);
             sr += x * cs + y * sn;
             si += y * cs - x * sn;
             self.step(&mut carrier, &mut code);
-        }
+        });
         let n = end.saturating_sub(start).max(1) as f32 * f32::from(CARRIER_AMPLITUDE);
         [gain * sr / n, gain * si / n]
     }
@@ -147,8 +144,7 @@ impl Cancelled {
 /// the samples (see the module documentation).
 fn refined(
     s: &KnownSignal,
-    i: &[i8],
-    q: Option<&[i8]>,
+    samples: SearchSamples<'_>,
     config: &AcquisitionConfig,
     dc: [f32; 2],
 ) -> Cancelled {
@@ -158,7 +154,7 @@ fn refined(
         let c = Cancelled::new(s.prn, chips, doppler, config);
         (0..ms)
             .map(|m| {
-                let a = c.phasor(m, i, q, config, dc);
+                let a = c.phasor(m, samples, config, dc);
                 a[0] * a[0] + a[1] * a[1]
             })
             .sum::<f32>()
@@ -196,9 +192,9 @@ fn refined(
     let c = Cancelled::new(s.prn, chips, doppler, config);
     let square = |a: Complex| [a[0] * a[0] - a[1] * a[1], 2.0 * a[0] * a[1]];
     let mut turn = [0.0f64; 2];
-    let mut previous = square(c.phasor(0, i, q, config, dc));
+    let mut previous = square(c.phasor(0, samples, config, dc));
     for m in 1..ms {
-        let a = square(c.phasor(m, i, q, config, dc));
+        let a = square(c.phasor(m, samples, config, dc));
         turn[0] += f64::from(a[0] * previous[0] + a[1] * previous[1]);
         turn[1] += f64::from(a[1] * previous[0] - a[0] * previous[1]);
         previous = a;
@@ -219,8 +215,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         &mut self,
         prn: Prn,
         signals: &[KnownSignal],
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> usize {
@@ -228,7 +223,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let mut count = 0usize;
         let others = signals.iter().filter(|s| s.prn != prn);
         for (slot, s) in self.cancelled.iter_mut().zip(others) {
-            *slot = refined(s, i, q, config, dc);
+            *slot = refined(s, samples, config, dc);
             count = count.saturating_add(1);
         }
         self.cancelled_count = count;

@@ -5,8 +5,8 @@
 #[cfg(doc)]
 use super::CROSS_CORRELATION_MARGIN;
 use super::{
-    check_inputs, check_known, input_mean, Acquisition, AcquisitionConfig, AcquisitionError,
-    SearchResult,
+    check_inputs, check_known, Acquisition, AcquisitionConfig, AcquisitionError, SearchResult,
+    SearchSamples,
 };
 use crate::signal::ca_code::{Prn, CA_CODE_LENGTH};
 use crate::tracking::xcorr::{
@@ -89,24 +89,23 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         &mut self,
         candidate: &SearchResult,
         known: &[KnownSignal],
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         keep_fraction: f32,
     ) -> Result<CancellationCheck, AcquisitionError> {
         self.check_built()?;
-        check_inputs(i, q, config)?;
+        check_inputs(samples, config)?;
         let victim = KnownSignal::from(candidate);
         check_known(known)?;
         check_known(core::slice::from_ref(&victim))?;
         if !keep_fraction.is_finite() {
             return Err(AcquisitionError::NonFinite);
         }
-        let dc = input_mean(i, q, config.samples_needed());
-        self.prepare_interference(i, q, config, dc);
-        let power = self.signal_power(&victim, false, i, q, config, dc);
-        let cancelled = self.set_cancellation(candidate.prn, known, i, q, config, dc);
-        let cancelled_power = self.signal_power(&victim, false, i, q, config, dc);
+        let dc = samples.mean(config.samples_needed());
+        self.prepare_interference(samples, config, dc);
+        let power = self.signal_power(&victim, false, samples, config, dc);
+        let cancelled = self.set_cancellation(candidate.prn, known, samples, config, dc);
+        let cancelled_power = self.signal_power(&victim, false, samples, config, dc);
         Ok(CancellationCheck {
             kept: cancelled_power >= keep_fraction * power,
             cancelled,
@@ -134,13 +133,12 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         &mut self,
         candidate: &SearchResult,
         known: &[KnownSignal],
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         margin: f32,
     ) -> Result<CrossCheck, AcquisitionError> {
         self.check_built()?;
-        check_inputs(i, q, config)?;
+        check_inputs(samples, config)?;
         let finite = |d: f32, c: f64| d.is_finite() && c.is_finite();
         if !margin.is_finite()
             || !finite(candidate.doppler_hz, f64::from(candidate.code_phase_chips))
@@ -150,15 +148,15 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         {
             return Err(AcquisitionError::NonFinite);
         }
-        let dc = input_mean(i, q, config.samples_needed());
-        self.prepare_interference(i, q, config, dc);
+        let dc = samples.mean(config.samples_needed());
+        self.prepare_interference(samples, config, dc);
         let mut probe = |s: &KnownSignal, interpolate: bool| SignalProbe {
             prn: s.prn,
             sample: 0,
             code_phase_chips: s.code_phase_chips,
             code_chips_per_sample: 0.0,
             doppler_hz: s.doppler_hz,
-            power: self.signal_power(s, interpolate, i, q, config, dc),
+            power: self.signal_power(s, interpolate, samples, config, dc),
         };
         // The candidate's strongest cell as it is (a cross-correlation peak is no triangle:
         // interpolating it as one would inflate it); the known signals' triangles
@@ -196,8 +194,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         &mut self,
         s: &KnownSignal,
         interpolate: bool,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> f32 {
@@ -205,7 +202,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let len = CA_CODE_LENGTH as f64;
         let phase = s.code_phase_chips - libm::floor(s.code_phase_chips / len) * len;
         let centre = libm::round(N as f64 * (1.0 - phase / len)) as usize & (N - 1);
-        let (peak, floor) = self.measure_at(i, q, s.doppler_hz, centre, interpolate, config, dc);
+        let (peak, floor) = self.measure_at(samples, s.doppler_hz, centre, interpolate, config, dc);
         (peak - floor).max(0.0)
     }
 }

@@ -71,6 +71,7 @@
 
 mod cancel;
 mod check;
+mod input;
 mod scan;
 mod tone;
 
@@ -80,6 +81,7 @@ use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ};
 
 pub use cancel::{MAX_CANCELLED, REFINE_MS, REFINE_STEP_CHIPS};
 pub use check::{CancellationCheck, CrossCheck, KnownSignal, CANCELLATION_KEEP_FRACTION};
+pub use input::SearchSamples;
 pub use scan::EXCISION_FACTOR;
 pub use tone::TONE_FACTOR;
 
@@ -299,6 +301,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// that it is made where it stays (a `static`, or a local that is never moved) and built
     /// there: [`Acquisition::new`] returns the engine by value, which can leave copies of its
     /// `(34 + 4·L)·N` bytes in the caller's frame on a microcontroller's stack.
+    #[inline(never)]
     pub const fn blank() -> Self {
         Self {
             fft: Fft::blank(),
@@ -357,9 +360,10 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         }
     }
 
-    /// Searches `prn` in the reference antenna's samples (`q = None` for real samples) and
-    /// verifies a candidate on the samples after the search's (see the module
-    /// documentation). `first_sample` is the receiver index of `i[0]`.
+    /// Searches `prn` in the reference antenna's decoded samples `i` (and `q`; `None` for
+    /// real samples) and verifies a candidate on the samples after the search's (see the
+    /// module documentation). `first_sample` is the receiver index of `i[0]`. The search on
+    /// bit planes, and with the search's figures: [`Acquisition::search_report`].
     ///
     /// Bounded: `(bins + 3) · K` iterations, each one millisecond of samples and two
     /// `N`-point FFTs.
@@ -379,7 +383,8 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         first_sample: u64,
         config: &AcquisitionConfig,
     ) -> Result<SearchResult, AcquisitionError> {
-        self.search_report(prn, i, q, first_sample, config)
+        let samples = SearchSamples::decoded(i, q)?;
+        self.search_report(prn, samples, first_sample, config)
             .map(|r| r.result)
     }
 
@@ -394,19 +399,20 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         t
     }
 
-    /// [`Acquisition::search`] with the background's figures and the verification's outcome.
+    /// [`Acquisition::search`] on `samples` (decoded or bit planes; the first is receiver
+    /// sample `first_sample`), with the background's figures and the verification's outcome.
     ///
     /// # Errors
-    /// As [`Acquisition::search`].
+    /// As [`Acquisition::search`] ([`AcquisitionError::LengthMismatch`] comes from
+    /// [`SearchSamples::decoded`]).
     pub fn search_report(
         &mut self,
         prn: Prn,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         first_sample: u64,
         config: &AcquisitionConfig,
     ) -> Result<SearchReport, AcquisitionError> {
-        self.search_report_cancelling(prn, i, q, first_sample, config, &[])
+        self.search_report_cancelling(prn, samples, first_sample, config, &[])
     }
 
     /// [`Acquisition::search_report`] on the samples with the `known` signals (detected or
@@ -425,21 +431,20 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     pub fn search_report_cancelling(
         &mut self,
         prn: Prn,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         first_sample: u64,
         config: &AcquisitionConfig,
         known: &[KnownSignal],
     ) -> Result<SearchReport, AcquisitionError> {
         self.check_built()?;
-        check_inputs(i, q, config)?;
+        check_inputs(samples, config)?;
         check_known(known)?;
-        let dc = input_mean(i, q, config.samples_needed());
-        self.prepare_interference(i, q, config, dc);
-        self.set_cancellation(prn, known, i, q, config, dc);
+        let dc = samples.mean(config.samples_needed());
+        self.prepare_interference(samples, config, dc);
+        self.set_cancellation(prn, known, samples, config, dc);
         self.prepare_code(prn);
         let grid = scan::Grid::search(config);
-        let (peak, floor) = self.scan(i, q, &grid, None, config, dc);
+        let (peak, floor) = self.scan(samples, &grid, None, config, dc);
         let k = config.noncoherent_ms;
         let effective_ms = floor.effective_ms(k);
         let noise_floor = floor.mean();
@@ -457,7 +462,14 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let (doppler_hz, code_phase_chips) = self.refine(&peak, &grid);
         let candidate = metric > threshold;
         let dwell = if candidate {
-            self.verify(i, q, doppler_hz, code_phase_chips, effective_ms, config, dc)
+            self.verify(
+                samples,
+                doppler_hz,
+                code_phase_chips,
+                effective_ms,
+                config,
+                dc,
+            )
         } else {
             scan::Dwell::not_tested()
         };
@@ -482,20 +494,14 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     }
 }
 
-/// Checks the configuration and the sample slices (at least the search's samples).
+/// Checks the configuration and the samples (at least the search's).
 fn check_inputs(
-    i: &[i8],
-    q: Option<&[i8]>,
+    samples: SearchSamples<'_>,
     config: &AcquisitionConfig,
 ) -> Result<(), AcquisitionError> {
     config.validate()?;
-    if i.len() < config.search_samples() {
+    if samples.len() < config.search_samples() {
         return Err(AcquisitionError::NotEnoughSamples);
-    }
-    if let Some(q) = q {
-        if q.len() < i.len() {
-            return Err(AcquisitionError::LengthMismatch);
-        }
     }
     Ok(())
 }
@@ -510,23 +516,6 @@ fn check_known(known: &[KnownSignal]) -> Result<(), AcquisitionError> {
     } else {
         Err(AcquisitionError::NonFinite)
     }
-}
-
-/// The mean of the first `n` samples (fewer if the slices are shorter), `[I, Q]`.
-fn input_mean(i: &[i8], q: Option<&[i8]>, n: usize) -> [f32; 2] {
-    let n = n.min(i.len());
-    if n == 0 {
-        return [0.0; 2];
-    }
-    // (at most isize::MAX samples of ±128: far inside i64, the saturation never acts)
-    let sum = |s: &[i8]| {
-        s.iter()
-            .take(n)
-            .fold(0i64, |a, &x| a.saturating_add(i64::from(x))) as f64
-    };
-    let mi = sum(i) / n as f64;
-    let mq = q.map_or(0.0, |q| sum(q) / n as f64);
-    [mi as f32, mq as f32]
 }
 
 /// The threshold `t` on peak/mean for a false-alarm probability `p_fa` over `cells` cells with
@@ -610,6 +599,11 @@ impl Error for AcquisitionError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Decoded complex samples for a search.
+    fn cx<'a>(i: &'a [i8], q: &'a [i8]) -> SearchSamples<'a> {
+        SearchSamples::decoded(i, Some(q)).unwrap()
+    }
     use crate::noise::{SplitMix64, StandardNormal};
     use crate::signal::ca_code::CA_CODE_LENGTH;
     use heapless::Vec;
@@ -710,6 +704,51 @@ mod tests {
         Acquisition::new().unwrap()
     }
 
+    /// A 1- or 2-bit front end's samples searched as bit planes give the very report the
+    /// search gives on the same samples decoded to `i8` (complex and real), and the
+    /// satellite is detected on both resolutions' planes.
+    #[test]
+    fn a_search_on_bit_planes_equals_the_search_on_the_decoded_samples() {
+        use crate::signal::bitwise::planes::{PlaneBuffer, PlaneFormat, Resolution};
+        let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (0.0, 0.0), 1);
+        for resolution in [Resolution::OneBit, Resolution::TwoBit] {
+            // the quantizer: sign, and magnitude 3 at or above 8 LSB (about 1 σ)
+            let level = |x: &i8| {
+                let m = if resolution == Resolution::TwoBit && x.unsigned_abs() >= 8 {
+                    3
+                } else {
+                    1
+                };
+                if *x < 0 {
+                    -m
+                } else {
+                    m
+                }
+            };
+            let (di, dq): (Samples, Samples) =
+                (i.iter().map(level).collect(), q.iter().map(level).collect());
+            for complex in [true, false] {
+                let mut planes = PlaneBuffer::<512>::new(PlaneFormat {
+                    resolution,
+                    complex,
+                });
+                planes.pack_i8(&di, &dq, 2).unwrap();
+                let decoded = SearchSamples::decoded(&di, complex.then_some(&dq[..])).unwrap();
+                let packed = SearchSamples::Planes(planes.planes());
+                let on_planes = engine()
+                    .search_report(prn(7), packed, 0, &config())
+                    .unwrap();
+                let on_decoded = engine()
+                    .search_report(prn(7), decoded, 0, &config())
+                    .unwrap();
+                assert_eq!(on_planes, on_decoded, "{resolution:?}, complex {complex}");
+                if complex {
+                    assert!(on_planes.result.detected, "{resolution:?}: {on_planes:?}");
+                }
+            }
+        }
+    }
+
     /// A satellite in thermal noise is a candidate, passes the dwell, and comes out at its
     /// Doppler and code phase; the background behaves as the `K` independent milliseconds it
     /// is, so the threshold is the classic one.
@@ -717,7 +756,7 @@ mod tests {
     fn a_satellite_in_noise_is_detected_verified_and_located() {
         let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (0.0, 0.0), 1);
         let r = engine()
-            .search_report(prn(7), &i, Some(&q), 0, &config())
+            .search_report(prn(7), cx(&i, &q), 0, &config())
             .unwrap();
         assert!(r.candidate && r.result.detected, "{r:?}");
         assert_eq!(r.verification, Verification::Passed);
@@ -741,15 +780,15 @@ mod tests {
         let candidate = engine().search(prn(7), &i, Some(&q), 0, &config()).unwrap();
         assert_eq!(
             blank
-                .cross_check(&candidate, &[], &i, Some(&q), &config(), 1.0)
+                .cross_check(&candidate, &[], cx(&i, &q), &config(), 1.0)
                 .err(),
             Some(AcquisitionError::NotBuilt)
         );
         blank.build().unwrap();
-        let built = blank.search_report(prn(7), &i, Some(&q), 0, &config());
+        let built = blank.search_report(prn(7), cx(&i, &q), 0, &config());
         assert_eq!(
             built,
-            engine().search_report(prn(7), &i, Some(&q), 0, &config())
+            engine().search_report(prn(7), cx(&i, &q), 0, &config())
         );
         assert!(built.unwrap().result.detected);
         assert_eq!(
@@ -764,7 +803,7 @@ mod tests {
         let (i, q) = samples(&[(7, 3.0, 420.0, 300.2)], 8.0, (0.0, 0.0), 2);
         let n = config().search_samples();
         let r = engine()
-            .search_report(prn(7), &i[..n], Some(&q[..n]), 0, &config())
+            .search_report(prn(7), cx(&i[..n], &q[..n]), 0, &config())
             .unwrap();
         assert!(r.candidate && !r.result.detected);
         assert_eq!(r.verification, Verification::NoSamples);
@@ -851,15 +890,14 @@ mod tests {
         }];
         let mut explained = 0;
         for p in (1..=32).filter(|&p| p != 5) {
-            let r = e.search_report(prn(p), &i, Some(&q), 0, &config()).unwrap();
+            let r = e.search_report(prn(p), cx(&i, &q), 0, &config()).unwrap();
             assert!(!r.result.detected, "PRN {p}: {r:?}");
             assert!(r.effective_ms < 4, "PRN {p}: {r:?}");
             let check = e
                 .cross_check(
                     &r.result,
                     &known,
-                    &i,
-                    Some(&q),
+                    cx(&i, &q),
                     &config(),
                     CROSS_CORRELATION_MARGIN,
                 )
@@ -884,14 +922,7 @@ mod tests {
         let r = e.search(prn(9), &i, Some(&q), 0, &config()).unwrap();
         assert!(r.detected, "{r:?}");
         let check = e
-            .cross_check(
-                &r,
-                &known,
-                &i,
-                Some(&q),
-                &config(),
-                CROSS_CORRELATION_MARGIN,
-            )
+            .cross_check(&r, &known, cx(&i, &q), &config(), CROSS_CORRELATION_MARGIN)
             .unwrap();
         assert!(!check.explained, "{check:?}");
     }
@@ -912,13 +943,12 @@ mod tests {
         let known = [KnownSignal::from(&found)];
         let mut worst = 0.0f32;
         for p in (1..=32).filter(|&p| p != 5 && p != 9) {
-            let r = e.search_report(prn(p), &i, Some(&q), 0, &config()).unwrap();
+            let r = e.search_report(prn(p), cx(&i, &q), 0, &config()).unwrap();
             let check = e
                 .cancellation_check(
                     &r.result,
                     &known,
-                    &i,
-                    Some(&q),
+                    cx(&i, &q),
                     &config(),
                     CANCELLATION_KEEP_FRACTION,
                 )
@@ -926,16 +956,16 @@ mod tests {
             assert_eq!(check.cancelled, 1);
             worst = worst.max(check.cancelled_power / check.power);
             let c = e
-                .search_report_cancelling(prn(p), &i, Some(&q), 0, &config(), &known)
+                .search_report_cancelling(prn(p), cx(&i, &q), 0, &config(), &known)
                 .unwrap();
             assert!(!c.result.detected, "PRN {p}: {c:?}");
         }
         assert!(worst < CANCELLATION_KEEP_FRACTION, "{worst}");
         // The strong satellite's cross-correlation dominates the noise: without the
         // cancellation the background repeats every millisecond, with it it is thermal.
-        let plain = e.search_report(prn(9), &i, Some(&q), 0, &config()).unwrap();
+        let plain = e.search_report(prn(9), cx(&i, &q), 0, &config()).unwrap();
         let r = e
-            .search_report_cancelling(prn(9), &i, Some(&q), 0, &config(), &known)
+            .search_report_cancelling(prn(9), cx(&i, &q), 0, &config(), &known)
             .unwrap();
         assert!(plain.effective_ms < 4, "{plain:?}");
         assert!(r.result.detected, "{r:?}");
@@ -946,8 +976,7 @@ mod tests {
             .cancellation_check(
                 &r.result,
                 &known,
-                &i,
-                Some(&q),
+                cx(&i, &q),
                 &config(),
                 CANCELLATION_KEEP_FRACTION,
             )

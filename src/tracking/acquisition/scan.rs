@@ -4,8 +4,8 @@
 use super::cancel::MAX_CANCELLED;
 use super::tone::{rotate, MAX_TONES};
 use super::{
-    Acquisition, AcquisitionConfig, Verification, FLOOR_GUARD_CHIPS, MAX_DOPPLER_BINS,
-    VERIFICATION_CODE_WINDOW_CHIPS, VERIFICATION_FALSE_ALARM,
+    Acquisition, AcquisitionConfig, SearchSamples, Verification, FLOOR_GUARD_CHIPS,
+    MAX_DOPPLER_BINS, VERIFICATION_CODE_WINDOW_CHIPS, VERIFICATION_FALSE_ALARM,
 };
 use crate::signal::ca_code::{Prn, CA_CHIP_RATE_HZ, CA_CODE_LENGTH, GPS_L1_HZ};
 use crate::signal::nco::{carrier_index, CarrierNco, COS_TABLE, SIN_TABLE};
@@ -229,8 +229,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// of kHz ([`Acquisition::accumulate_chunk`]).
     pub(super) fn scan(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         grid: &Grid,
         window: Option<CodeWindow>,
         config: &AcquisitionConfig,
@@ -246,7 +245,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             let Some(&(_, offset, _)) = chunk.bins().first() else {
                 continue;
             };
-            self.accumulate_chunk(i, q, grid, offset, chunk.bins(), config, dc);
+            self.accumulate_chunk(samples, grid, offset, chunk.bins(), config, dc);
             for (lane, &(b, _, _)) in self.lanes.iter().zip(chunk.bins()) {
                 let (local, local_at, top, top_at) = strongest(lane, window);
                 if let Some(slot) = self.peaks.get_mut(b) {
@@ -278,8 +277,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn measure_at(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         doppler: f32,
         centre: usize,
         interpolate: bool,
@@ -293,7 +291,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             first_ms: 0,
         };
         let window = CodeWindow { centre, half: 1 };
-        let (peak, floor) = self.scan(i, q, &grid, Some(window), config, dc);
+        let (peak, floor) = self.scan(samples, &grid, Some(window), config, dc);
         if !interpolate {
             return (peak.power, floor.mean());
         }
@@ -321,8 +319,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     #[allow(clippy::too_many_arguments)]
     fn accumulate_chunk(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         grid: &Grid,
         offset: f32,
         chunk: &[(usize, f32, i32)],
@@ -333,7 +330,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             *lane = [0.0; N];
         }
         for m in 0..usize::from(config.noncoherent_ms) {
-            self.decimate(i, q, grid.first_ms.saturating_add(m), offset, config, dc);
+            self.decimate(samples, grid.first_ms.saturating_add(m), offset, config, dc);
             self.fft.forward(&mut self.data);
             self.excise();
             for (lane, &(b, _, lines)) in self.lanes.iter_mut().zip(chunk) {
@@ -353,15 +350,14 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     #[cfg(test)]
     pub(super) fn accumulate_remix(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         doppler: f32,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> [f32; N] {
         let mut power = [0.0f32; N];
         for m in 0..usize::from(config.noncoherent_ms) {
-            self.decimate(i, q, m, doppler, config, dc);
+            self.decimate(samples, m, doppler, config, dc);
             self.fft.transform(&mut self.data, false);
             self.excise();
             for (d, c) in self.data.iter_mut().zip(self.code.iter()) {
@@ -381,17 +377,16 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// of millisecond 0 stands out: nothing to excise). Clears the cancelled signals.
     pub(super) fn prepare_interference(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) {
         self.level = 0.0;
         self.tone_count = 0;
         self.cancelled_count = 0;
-        let level = self.spectrum_level(i, q, config, dc);
-        let level = if self.find_tones(i, q, level, config, dc) > 0 {
-            self.spectrum_level(i, q, config, dc)
+        let level = self.spectrum_level(samples, config, dc);
+        let level = if self.find_tones(samples, level, config, dc) > 0 {
+            self.spectrum_level(samples, config, dc)
         } else {
             level
         };
@@ -407,12 +402,11 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// ([`LEVEL_STEPS`] steps).
     fn spectrum_level(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> f32 {
-        self.decimate(i, q, 0, 0.0, config, dc);
+        self.decimate(samples, 0, 0.0, config, dc);
         self.fft.transform(&mut self.data, false);
         let mut level = f32::INFINITY;
         for _ in 0..LEVEL_STEPS {
@@ -472,8 +466,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// bin's carrier and integrates it into the `N` bins of `self.data`.
     fn decimate(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         m: usize,
         doppler: f32,
         config: &AcquisitionConfig,
@@ -482,20 +475,20 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         self.data = [[0.0; 2]; N];
         let fs = config.sample_rate_hz;
         let start = config.ms_start(m);
-        let end = config.ms_start(m.saturating_add(1)).min(i.len());
+        let end = config.ms_start(m.saturating_add(1)).min(samples.len());
         let step = CarrierNco::step_for(config.intermediate_frequency_hz + f64::from(doppler), fs);
         // Bin of sample k: floor((k/f_s − m·1 ms) · N · 1000), in 32.32 fixed point.
         let bin_step = libm::round(N as f64 * 1000.0 / fs * 4_294_967_296.0) as u64;
         let t0 = (start as f64 / fs - m as f64 * 1e-3) * N as f64 * 1000.0;
         let mut bin_acc = libm::round(t0 * 4_294_967_296.0) as u64;
         let mut phase = 0u32;
-        let dq = if q.is_some() { dc[1] } else { 0.0 };
+        let dq = if samples.is_complex() { dc[1] } else { 0.0 };
         let tones = self.tones.get(..self.tone_count).unwrap_or(&[]);
         let mut tone_phase = [0u32; MAX_TONES];
         let mut phasors = [[0.0f32; 2]; MAX_TONES];
         for ((p, a), t) in tone_phase.iter_mut().zip(phasors.iter_mut()).zip(tones) {
             *p = t.step().wrapping_mul(start as u32);
-            *a = t.phasor(m, i, q, config, dc);
+            *a = t.phasor(m, samples, config, dc);
         }
         // The known signals cancelled: each one's phasor over this millisecond, and its
         // replica's phase words at the first sample.
@@ -503,32 +496,27 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let mut replicas = [(0u32, 0u64, [0.0f32; 2]); MAX_CANCELLED];
         for (r, c) in replicas.iter_mut().zip(cancelled) {
             let (carrier, code) = c.at(start);
-            *r = (carrier, code, c.phasor(m, i, q, config, dc));
+            *r = (carrier, code, c.phasor(m, samples, config, dc));
         }
         if tones.is_empty() && cancelled.is_empty() {
             // (the common case: nothing to cancel, one tight pass)
-            let range = start..end.max(start);
-            let xs = i.get(range.clone()).unwrap_or(&[]).iter();
-            let nco = MixNco {
+            let mut nco = MixNco {
                 phase: 0,
                 step,
                 bin_acc,
                 bin_step,
-                dc: [dc[0], dq],
             };
-            match q.map(|q| q.get(range).unwrap_or(&[])) {
-                Some(ys) => nco.mix(&mut self.data, xs.zip(ys.iter())),
-                None => nco.mix(&mut self.data, xs.zip(core::iter::repeat(&0i8))),
-            }
+            let data = &mut self.data;
+            samples.for_each_centred(start..end, [dc[0], dq], |x, y| nco.mix(data, x, y));
             return;
         }
-        for k in start..end {
-            let mut x = f32::from(i.get(k).copied().unwrap_or(0)) - dc[0];
-            let mut y = q.and_then(|q| q.get(k)).map_or(0.0, |v| f32::from(*v) - dq);
+        let complex = samples.is_complex();
+        let data = &mut self.data;
+        samples.for_each_centred(start..end, [dc[0], dq], |mut x, mut y| {
             for ((p, a), t) in tone_phase.iter_mut().zip(&phasors).zip(tones) {
                 let v = rotate(*a, *p);
                 x -= v[0];
-                if q.is_some() {
+                if complex {
                     y -= v[1];
                 }
                 *p = p.wrapping_add(t.step());
@@ -537,7 +525,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
                 let v = rotate(*a, *carrier);
                 let chip = c.chip(*code);
                 x -= chip * v[0];
-                if q.is_some() {
+                if complex {
                     y -= chip * v[1];
                 }
                 c.step(carrier, code);
@@ -545,13 +533,13 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             let idx = carrier_index(phase);
             let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
             let bin = ((bin_acc >> 32) as usize) & (N - 1);
-            let d = &mut self.data[bin];
+            let d = &mut data[bin];
             d[0] += x * c + y * s;
             d[1] += y * c - x * s;
             phase = phase.wrapping_add(step);
             // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
             bin_acc = bin_acc.wrapping_add(bin_step);
-        }
+        });
     }
 
     /// Refined Doppler (Hz) and code phase (chips at the first sample) of a search peak.
@@ -598,15 +586,14 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn verify(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         doppler: f32,
         code_phase: f32,
         effective_ms: u16,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> Dwell {
-        if i.len() < config.samples_needed() {
+        if samples.len() < config.samples_needed() {
             return Dwell {
                 verification: Verification::NoSamples,
                 ..Dwell::not_tested()
@@ -622,7 +609,13 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let half =
             libm::ceilf(VERIFICATION_CODE_WINDOW_CHIPS * N as f32 / CA_CODE_LENGTH as f32) as usize;
         let grid = Grid::dwell(config, doppler);
-        let (peak, floor) = self.scan(i, q, &grid, Some(CodeWindow { centre, half }), config, dc);
+        let (peak, floor) = self.scan(
+            samples,
+            &grid,
+            Some(CodeWindow { centre, half }),
+            config,
+            dc,
+        );
         let k = floor.effective_ms(config.noncoherent_ms).min(effective_ms);
         let cells = (DWELL_BINS * (2 * half + 1)) as f64;
         let threshold = self.threshold(k, cells, VERIFICATION_FALSE_ALARM);
@@ -670,29 +663,23 @@ struct MixNco {
     step: u32,
     bin_acc: u64,
     bin_step: u64,
-    dc: [f32; 2],
 }
 
 impl MixNco {
-    /// Mixes the `(I, Q)` samples with the carrier and integrates them into the bins.
-    fn mix<'a, const N: usize>(
-        mut self,
-        data: &mut [Complex; N],
-        samples: impl Iterator<Item = (&'a i8, &'a i8)>,
-    ) {
-        for (&xi, &yi) in samples {
-            let (x, y) = (f32::from(xi) - self.dc[0], f32::from(yi) - self.dc[1]);
-            let idx = carrier_index(self.phase);
-            let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
-            // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
-            let bin = ((self.bin_acc >> 32) as usize) & (N - 1);
-            if let Some(d) = data.get_mut(bin) {
-                d[0] += x * c + y * s;
-                d[1] += y * c - x * s;
-            }
-            self.phase = self.phase.wrapping_add(self.step);
-            self.bin_acc = self.bin_acc.wrapping_add(self.bin_step);
+    /// Mixes one `(I, Q)` sample (less the mean) with the carrier and integrates it into its
+    /// bin.
+    #[inline(always)]
+    fn mix<const N: usize>(&mut self, data: &mut [Complex; N], x: f32, y: f32) {
+        let idx = carrier_index(self.phase);
+        let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
+        // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
+        let bin = ((self.bin_acc >> 32) as usize) & (N - 1);
+        if let Some(d) = data.get_mut(bin) {
+            d[0] += x * c + y * s;
+            d[1] += y * c - x * s;
         }
+        self.phase = self.phase.wrapping_add(self.step);
+        self.bin_acc = self.bin_acc.wrapping_add(self.bin_step);
     }
 }
 
@@ -800,6 +787,11 @@ fn add_power<const N: usize>(power: &mut [f32; N], z: &[Complex; N], shift: usiz
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Decoded complex samples for a search.
+    fn cx<'a>(i: &'a [i8], q: &'a [i8]) -> SearchSamples<'a> {
+        SearchSamples::decoded(i, Some(q)).unwrap()
+    }
     use crate::noise::{SplitMix64, StandardNormal};
     use crate::tracking::fft::Fft;
 
@@ -889,7 +881,7 @@ mod tests {
             let mut shared = Acquisition::<1024, 4>::new().unwrap();
             shared.prepare_code(Prn::new(p).unwrap());
             let grid = Grid::search(&config);
-            let (peak, _) = shared.scan(&i, Some(&q), &grid, None, &config, [0.0; 2]);
+            let (peak, _) = shared.scan(cx(&i, &q), &grid, None, &config, [0.0; 2]);
             let mut reference = Acquisition::<1024, 1>::new().unwrap();
             reference.prepare_code(Prn::new(p).unwrap());
             let (mut best, mut best_at) = (0.0f32, (0usize, 0usize));
@@ -897,7 +889,7 @@ mod tests {
             let near = libm::round((f - f64::from(grid.first_hz)) / 500.0) as usize;
             for b in [0, 57, near - 2, near - 1, near, near + 1, near + 2, 200] {
                 let power =
-                    reference.accumulate_remix(&i, Some(&q), grid.doppler(b), &config, [0.0; 2]);
+                    reference.accumulate_remix(cx(&i, &q), grid.doppler(b), &config, [0.0; 2]);
                 let (at, top) =
                     power
                         .iter()

@@ -13,7 +13,7 @@
 //! phasor measured again for each millisecond mixed (no storage; one more pass over the
 //! millisecond's samples per tone, only when a tone was found).
 
-use super::{Acquisition, AcquisitionConfig};
+use super::{Acquisition, AcquisitionConfig, SearchSamples};
 use crate::signal::nco::{carrier_index, CarrierNco, CARRIER_AMPLITUDE, COS_TABLE, SIN_TABLE};
 use crate::tracking::fft::Complex;
 
@@ -50,29 +50,26 @@ impl Tone {
     pub(super) fn phasor(
         &self,
         m: usize,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         config: &AcquisitionConfig,
         dc: [f32; 2],
     ) -> Complex {
-        let gain = if q.is_some() { 1.0 } else { 2.0 };
-        let dq = if q.is_some() { dc[1] } else { 0.0 };
+        let gain = if samples.is_complex() { 1.0 } else { 2.0 };
+        let dq = if samples.is_complex() { dc[1] } else { 0.0 };
         let (start, end) = (
             config.ms_start(m),
-            config.ms_start(m.saturating_add(1)).min(i.len()),
+            config.ms_start(m.saturating_add(1)).min(samples.len()),
         );
         let mut phase = self.step.wrapping_mul(start as u32);
         let (mut sr, mut si) = (0.0f32, 0.0f32);
-        for k in start..end {
-            let x = f32::from(i.get(k).copied().unwrap_or(0)) - dc[0];
-            let y = q.and_then(|q| q.get(k)).map_or(0.0, |v| f32::from(*v) - dq);
+        samples.for_each_centred(start..end, [dc[0], dq], |x, y| {
             let idx = carrier_index(phase);
             let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
             // (x + jy) · e^{−jθ}
             sr += x * c + y * s;
             si += y * c - x * s;
             phase = phase.wrapping_add(self.step);
-        }
+        });
         let n = end.saturating_sub(start).max(1) as f32 * f32::from(CARRIER_AMPLITUDE);
         [gain * sr / n, gain * si / n]
     }
@@ -95,8 +92,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// 0, background line power `level`) and refines their frequencies. Returns how many.
     pub(super) fn find_tones(
         &mut self,
-        i: &[i8],
-        q: Option<&[i8]>,
+        samples: SearchSamples<'_>,
         level: f32,
         config: &AcquisitionConfig,
         dc: [f32; 2],
@@ -136,7 +132,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let mut count = 0usize;
         for &(_, f) in lines.iter().filter(|l| l.0 > 0.0) {
             if let Some(slot) = self.tones.get_mut(count) {
-                *slot = refine_tone(f, i, q, ms, config, dc);
+                *slot = refine_tone(f, samples, ms, config, dc);
                 count = count.saturating_add(1); // (at most the tones' capacity)
             }
         }
@@ -149,8 +145,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
 /// first milliseconds (at most `ms`).
 fn refine_tone(
     f_hz: f32,
-    i: &[i8],
-    q: Option<&[i8]>,
+    samples: SearchSamples<'_>,
     ms: usize,
     config: &AcquisitionConfig,
     dc: [f32; 2],
@@ -163,9 +158,9 @@ fn refine_tone(
             step: CarrierNco::step_for(f, fs),
         };
         let mut turn = [0.0f64; 2];
-        let mut previous = tone.phasor(0, i, q, config, dc);
+        let mut previous = tone.phasor(0, samples, config, dc);
         for m in 1..refine {
-            let a = tone.phasor(m, i, q, config, dc);
+            let a = tone.phasor(m, samples, config, dc);
             turn[0] += f64::from(a[0] * previous[0] + a[1] * previous[1]);
             turn[1] += f64::from(a[1] * previous[0] - a[0] * previous[1]);
             previous = a;

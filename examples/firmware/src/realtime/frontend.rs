@@ -6,9 +6,9 @@
 //! significant bits, each field `sign·2 + magnitude`); the 1-bit front end delivers the same
 //! layout with every magnitude bit 0 (its ADC has no magnitude output). The firmware packs
 //! those bytes into the antennas' bit planes with the core's packing
-//! (`PlaneBuffer::pack_bytes`), as it would from a DMA buffer; the acquisition takes the
-//! `i8` values host-sim uses for the same front end (`host-sim/src/synth/quantize.rs`):
-//! 1-bit `±16`, 2-bit `±8, ±24` (threshold 1σ).
+//! (`PlaneBuffer::pack_bytes`), as it would from a DMA buffer; the acquisition searches the
+//! reference antenna's planes of its first milliseconds, collected with
+//! `PlaneBuffer::append`.
 
 use gnss_attitude::signal::bitwise::{PlaneFormat, Resolution};
 use gnss_attitude::signal::SampleFormat;
@@ -24,12 +24,6 @@ pub enum FrontEnd {
 
 /// 2-bit magnitude threshold, in noise σ (host-sim's `TWO_BIT_THRESHOLD`).
 pub const TWO_BIT_THRESHOLD: f32 = 1.0;
-/// `i8` value of a 1-bit sample's unit level (host-sim's `BIT1_LSB_PER_LEVEL`).
-pub const BIT1_LSB_PER_LEVEL: i8 = 16;
-/// `i8` value of a 2-bit sample's unit level (host-sim's `SM2_LSB_PER_LEVEL`: `±1, ±3` become
-/// `±8, ±24`).
-pub const SM2_LSB_PER_LEVEL: i8 = 8;
-
 /// The byte layout the front ends deliver (`sm2iq`).
 pub const SM2IQ: SampleFormat = SampleFormat::SignMagnitude2 { complex: true };
 
@@ -63,28 +57,6 @@ impl FrontEnd {
         match self {
             FrontEnd::OneBit => sign,
             FrontEnd::TwoBit => sign | u8::from(x.abs() > TWO_BIT_THRESHOLD),
-        }
-    }
-
-    /// The sample value the acquisition (i8) correlator receives for the analog component `x` (noise σ = 1).
-    #[inline(always)]
-    pub fn quantize(self, x: f32) -> i8 {
-        match self {
-            FrontEnd::OneBit => {
-                if x < 0.0 {
-                    -BIT1_LSB_PER_LEVEL
-                } else {
-                    BIT1_LSB_PER_LEVEL
-                }
-            }
-            FrontEnd::TwoBit => {
-                let level = if x.abs() > TWO_BIT_THRESHOLD { 3 * SM2_LSB_PER_LEVEL } else { SM2_LSB_PER_LEVEL };
-                if x < 0.0 {
-                    -level
-                } else {
-                    level
-                }
-            }
         }
     }
 }

@@ -11,6 +11,7 @@ use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, Sam
 use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneError};
 use gnss_attitude::signal::nco::CodeNco;
 use gnss_attitude::signal::{BitSettings, Prn, SlaveTaps, CA_CHIP_RATE_HZ};
+use gnss_attitude::tracking::SearchSamples;
 
 use super::frontend::{FrontEnd, SM2IQ};
 use super::memory;
@@ -33,6 +34,8 @@ pub const BLOCK: usize = SAMPLES_PER_MS * BLOCK_MS;
 pub const ACQUISITION_MS: u16 = 6;
 /// Samples per component the acquisition searches and verifies on (`2 K` ms + 1).
 pub const ACQUISITION_SAMPLES: usize = 2 * ACQUISITION_MS as usize * SAMPLES_PER_MS + 1;
+/// Plane words that hold them.
+pub const ACQUISITION_WORDS: usize = ACQUISITION_SAMPLES.div_ceil(32);
 /// The front end's bytes of one antenna and block (`sm2iq`: two complex samples per byte).
 pub const BLOCK_BYTES: usize = BLOCK / 2;
 /// Plane words per antenna and block (32 samples per word).
@@ -144,25 +147,34 @@ pub struct Outcome {
 }
 
 /// Acquisition: every PRN of the sky searched on the reference antenna's first
-/// [`ACQUISITION_SAMPLES`] (its own buffer, in this frame: gone before the stream's).
-/// Returns the number detected.
+/// [`ACQUISITION_SAMPLES`], collected as bit planes block by block as the front end delivers
+/// them (packed with the stream's `bytes` and `planes`, appended to a buffer of this frame's:
+/// 15.6 KB where `i8` samples took 62 KB). The searches are counted as one region (printed
+/// with the number detected). Returns the number detected.
 #[inline(never)]
-fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd) -> usize {
-    let mut ai = [0i8; ACQUISITION_SAMPLES];
-    let mut aq = [0i8; ACQUISITION_SAMPLES];
+fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [[u8; BLOCK_BYTES]; 3], planes: &mut [PlaneBuffer<WORDS>; 3]) -> usize {
+    let mut collected = PlaneBuffer::<ACQUISITION_WORDS>::new(front_end.plane_format());
     let first = synth.next_sample();
-    synth.fill(front_end, &mut [&mut ai[..]], &mut [&mut aq[..]]);
-    let (ai, aq) = (&ai[..], &aq[..]);
+    while collected.len() < ACQUISITION_SAMPLES {
+        let [b0, b1, b2] = bytes;
+        synth.fill_bytes(front_end, [&mut b0[..], &mut b1[..], &mut b2[..]]);
+        let appended = pack_block(planes, [&b0[..], &b1[..], &b2[..]]).map_err(|e| hprintln!("realtime {}: acquisition block refused: {:?}", front_end.name(), e)).and_then(|()| collected.append(&planes[0].planes()).map_err(|e| hprintln!("realtime {}: acquisition planes refused: {:?}", front_end.name(), e)));
+        if appended.is_err() {
+            return 0;
+        }
+    }
+    let samples = SearchSamples::Planes(collected.planes());
+    let search_all = || SKY.map(|(prn, _, _)| Prn::new(prn).map(|prn| rx.search_samples(prn, samples, first)));
+    let (region, results) = count(search_all);
     let mut detected = 0;
-    for (s, (prn, _, _)) in SKY.iter().enumerate() {
-        let Some(prn) = Prn::new(*prn) else { continue };
-        match rx.search(prn, ai, Some(aq), first) {
-            Ok(r) => {
+    for (s, result) in results.iter().enumerate() {
+        match result {
+            Some(Ok(r)) => {
                 detected += usize::from(r.detected);
                 hprintln!(
                     "realtime {}: search PRN {}: detected {} Doppler {} Hz (truth {}), code phase {} chips (truth {})",
                     front_end.name(),
-                    prn.number(),
+                    r.prn.number(),
                     r.detected,
                     r.doppler_hz,
                     DOPPLER_HZ[s],
@@ -170,9 +182,11 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd) -> usize {
                     CODE_PHASE_CHIPS[s]
                 );
             }
-            Err(e) => hprintln!("realtime {}: search PRN {} refused: {:?}", front_end.name(), prn.number(), e),
+            Some(Err(e)) => hprintln!("realtime {}: search of sky entry {} refused: {:?}", front_end.name(), s, e),
+            None => hprintln!("realtime {}: sky entry {} is no PRN", front_end.name(), s),
         }
     }
+    hprintln!("realtime {}: acquisition region {}: {} of {} PRNs detected (+-2.5 kHz, {} ms non-coherent, on bit planes)", front_end.name(), region, detected, SKY.len(), ACQUISITION_MS);
     detected
 }
 
@@ -241,7 +255,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
     };
     let mut synth = Synth::new(seed);
     let sp = memory::sp();
-    let detected = acquire(rx, &mut synth, front_end);
+    let detected = acquire(rx, &mut synth, front_end, &mut bytes, &mut planes);
     out.acquisition_stack = memory::stack_top() - sp + memory::used_below(sp);
     memory::paint_below();
     // the stream continues on the receiver's 1 ms grid

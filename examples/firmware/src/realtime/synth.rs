@@ -195,20 +195,6 @@ impl Synth {
         (sum as f32 - 510.0) * (1.0 / 147.800_54)
     }
 
-    /// The stream's next `out_i[0].len()` samples of the first `antennas` antennas (all
-    /// slices the same length), quantized by `front_end` to the acquisition's `i8` levels.
-    pub fn fill(&mut self, front_end: FrontEnd, out_i: &mut [&mut [i8]], out_q: &mut [&mut [i8]]) {
-        let antennas = out_i.len().min(out_q.len()).min(3);
-        let len = out_i.first().map_or(0, |s| s.len());
-        self.generate(antennas, len, |p, start, re, im| {
-            let (oi, oq) = (&mut out_i[p][start..start + re.len()], &mut out_q[p][start..start + re.len()]);
-            for k in 0..re.len() {
-                oi[k] = front_end.quantize(re[k]);
-                oq[k] = front_end.quantize(im[k]);
-            }
-        });
-    }
-
     /// The stream's next `2 · out[0].len()` complex samples of the three antennas as the
     /// front end delivers them: `sm2iq` bytes ([`super::frontend::SM2IQ`], two samples per
     /// byte, first sample in the most significant bits), one stream per antenna.
