@@ -202,9 +202,13 @@ mod tests {
         out
     }
 
-    #[test]
-    fn planes_read_as_the_decoded_samples_they_pack_over_any_range() {
-        let (i, q) = (levels(200, 1), levels(200, 2));
+    /// Pseudo-random samples packed into planes of every format: `check(format, planes,
+    /// i, q)` with the values the planes hold (`±1` for 1-bit, `±1, ±3` for 2-bit).
+    fn for_each_format(
+        seed: u32,
+        mut check: impl FnMut(PlaneFormat, &PlaneBuffer<7>, &[i8; 200], &[i8; 200]),
+    ) {
+        let (i, q) = (levels(200, seed), levels(200, seed + 1));
         for resolution in [Resolution::OneBit, Resolution::TwoBit] {
             for complex in [false, true] {
                 let format = PlaneFormat {
@@ -212,67 +216,53 @@ mod tests {
                     complex,
                 };
                 let mut buffer = PlaneBuffer::<7>::new(format);
-                buffer.pack_i8(&i[..200], &q[..200], 2).unwrap();
-                let planes = SearchSamples::Planes(buffer.planes());
-                let one_bit = |x: i8| {
-                    if resolution == Resolution::OneBit {
-                        x.signum()
-                    } else {
-                        x
-                    }
+                buffer.pack_i8(&i, &q, 2).unwrap();
+                let held = |x: i8| match resolution {
+                    Resolution::OneBit => x.signum(),
+                    Resolution::TwoBit => x,
                 };
-                for (start, end) in [(0, 200), (5, 37), (31, 33), (64, 96), (190, 260), (50, 50)] {
-                    let mut got = [(0f32, 0f32); 200];
-                    let mut n = 0;
-                    planes.for_each_centred(start..end, [0.5, -0.25], |x, y| {
-                        got[n] = (x, y);
-                        n += 1;
-                    });
-                    assert_eq!(n, end.min(200).saturating_sub(start));
-                    for (k, g) in (start..).zip(&got[..n]) {
-                        let x = f32::from(one_bit(i[k])) - 0.5;
-                        let y = if complex {
-                            f32::from(one_bit(q[k])) + 0.25
-                        } else {
-                            0.0
-                        };
-                        assert_eq!(*g, (x, y), "sample {k} of {format:?}");
-                    }
-                }
+                check(format, &buffer, &i.map(held), &q.map(held));
             }
         }
     }
 
     #[test]
-    fn the_mean_of_planes_equals_the_mean_of_the_decoded_samples() {
-        let (i, q) = (levels(200, 3), levels(200, 4));
-        for resolution in [Resolution::OneBit, Resolution::TwoBit] {
-            for complex in [false, true] {
-                let format = PlaneFormat {
-                    resolution,
-                    complex,
-                };
-                let mut buffer = PlaneBuffer::<7>::new(format);
-                buffer.pack_i8(&i[..200], &q[..200], 2).unwrap();
-                let value = |x: &i8| {
-                    if resolution == Resolution::OneBit {
-                        x.signum()
+    fn planes_read_as_the_decoded_samples_they_pack_over_any_range() {
+        for_each_format(1, |format, buffer, i, q| {
+            let planes = SearchSamples::Planes(buffer.planes());
+            for (start, end) in [(0, 200), (5, 37), (31, 33), (64, 96), (190, 260), (50, 50)] {
+                let mut got = [(0f32, 0f32); 200];
+                let mut n = 0;
+                planes.for_each_centred(start..end, [0.5, -0.25], |x, y| {
+                    got[n] = (x, y);
+                    n += 1;
+                });
+                assert_eq!(n, end.min(200).saturating_sub(start));
+                for (k, g) in (start..).zip(&got[..n]) {
+                    let x = f32::from(i[k]) - 0.5;
+                    let y = if format.complex {
+                        f32::from(q[k]) + 0.25
                     } else {
-                        *x
-                    }
-                };
-                let (di, dq) = (i.map(|x| value(&x)), q.map(|x| value(&x)));
-                let decoded =
-                    SearchSamples::decoded(&di[..200], complex.then_some(&dq[..200])).unwrap();
-                for n in [0, 1, 31, 32, 33, 150, 1000] {
-                    assert_eq!(
-                        SearchSamples::Planes(buffer.planes()).mean(n),
-                        decoded.mean(n),
-                        "{format:?}, {n} samples"
-                    );
+                        0.0
+                    };
+                    assert_eq!(*g, (x, y), "sample {k} of {format:?}");
                 }
             }
-        }
+        });
+    }
+
+    #[test]
+    fn the_mean_of_planes_equals_the_mean_of_the_decoded_samples() {
+        for_each_format(3, |format, buffer, i, q| {
+            let decoded = SearchSamples::decoded(i, format.complex.then_some(&q[..])).unwrap();
+            for n in [0, 1, 31, 32, 33, 150, 1000] {
+                assert_eq!(
+                    SearchSamples::Planes(buffer.planes()).mean(n),
+                    decoded.mean(n),
+                    "{format:?}, {n} samples"
+                );
+            }
+        });
     }
 
     #[test]
