@@ -33,7 +33,7 @@
 //! ([`SampleReceiver::search_samples`] with
 //! [`SearchSamples::Planes`], collected block by block
 //! with [`PlaneBuffer::append`](crate::signal::bitwise::PlaneBuffer::append)): the 13 ms of a
-//! 6 ms search and its dwell at 2.6 Msps take 62 KiB as `i8`, 7.6 / 15.2 KiB as 1- / 2-bit
+//! 6 ms search and its dwell at 2.6 Msps take 61 KiB as `i8`, 7.6 / 15.2 KiB as 1- / 2-bit
 //! complex planes.
 
 use heapless::Vec;

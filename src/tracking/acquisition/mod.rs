@@ -63,6 +63,12 @@
 //! neighbours, the Doppler by a parabola through the peak amplitudes of the neighbouring
 //! Doppler bins.
 //!
+//! # Samples
+//! A search reads [`SearchSamples`]: the reference antenna's samples decoded to `i8`, or
+//! the bit planes of a 1- or 2-bit front end read as they are (the same values, the same
+//! report; a microcontroller keeps 13 ms of 2-bit complex planes in 15 KiB instead of 61 KiB
+//! of `i8`).
+//!
 //! # Memory and time
 //! `Acquisition<N>` holds four `N`-element arrays (twiddles, code spectrum, data, power) and
 //! one peak per Doppler bin: 60 KiB for `N = 2048`, 30 KiB for `N = 1024` (the target's

@@ -191,7 +191,7 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
 }
 
 /// The whole run of one front end: the receiver built (on the stack, bound inside its
-/// `Result`: one copy of its 101 KB), then [`stream`] in a frame of its own.
+/// `Result`: one copy of its 78 KB), then [`stream`] in a frame of its own.
 #[inline(never)]
 pub fn run(front_end: FrontEnd) -> Outcome {
     // (through an opaque function pointer: `new` keeps a frame of its own instead of
