@@ -551,8 +551,10 @@ fn sample_receiver() {
             let _ = black_box(block.pack_i8(si, sq, black_box(2)));
             let _ = black_box(collected.append(&block.planes()));
         }
-        let samples = if black_box(true) { SearchSamples::Planes(collected.planes().head(black_box(5000))) } else { SearchSamples::Decoded { i: si, q } };
-        let _ = black_box(rx.search_samples(prn, black_box(samples), black_box(0)));
+        let samples = if black_box(true) { Ok(SearchSamples::Planes(collected.planes().head(black_box(5000)))) } else { SearchSamples::decoded(si, q) };
+        if let Ok(samples) = samples {
+            let _ = black_box(rx.search_samples(prn, black_box(samples), black_box(0)));
+        }
         collected.clear();
     }
     let acq: SearchResult = black_box(SearchResult {

@@ -384,7 +384,7 @@ impl<const W: usize> PlaneBuffer<W> {
                 *d &= if w == w0 { (1u32 << shift) - 1 } else { 0 };
             }
             for (w, &x) in src.iter().enumerate().take(words) {
-                let x = x & Self::tail_mask(n, w);
+                let x = x & tail_mask(n, w);
                 if let Some(d) = dst.get_mut(w0.saturating_add(w)) {
                     *d |= x << shift;
                 }
@@ -466,16 +466,6 @@ impl<const W: usize> PlaneBuffer<W> {
         }
     }
 
-    /// The bits of word `w` that hold samples when `n` samples are packed.
-    fn tail_mask(n: usize, w: usize) -> u32 {
-        let valid = n.saturating_sub(w.saturating_mul(WORD_SAMPLES));
-        if valid >= WORD_SAMPLES {
-            u32::MAX
-        } else {
-            (1u32 << valid) - 1
-        }
-    }
-
     /// Packs `n` samples from `bytes`, `B` bytes per word, with `word` turning one word's
     /// bytes into the four plane words; the last, partial word from a zero-padded copy.
     #[inline(always)]
@@ -499,7 +489,7 @@ impl<const W: usize> PlaneBuffer<W> {
             for (d, &b) in last.iter_mut().zip(from) {
                 *d = b;
             }
-            let mask = Self::tail_mask(n, full);
+            let mask = tail_mask(n, full);
             self.set_word(full, word(&last).map(|v| v & mask));
         }
     }
@@ -652,6 +642,17 @@ const fn sm2_complex_table() -> [u32; 256] {
         b += 1;
     }
     t
+}
+
+/// The bits of word `w` that hold samples when `n` samples are packed, sample `k` of a
+/// word in bit `k`.
+pub(crate) fn tail_mask(n: usize, w: usize) -> u32 {
+    let valid = n.saturating_sub(w.saturating_mul(WORD_SAMPLES));
+    if valid >= WORD_SAMPLES {
+        u32::MAX
+    } else {
+        (1u32 << valid) - 1
+    }
 }
 
 #[cfg(test)]

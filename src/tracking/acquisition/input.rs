@@ -5,7 +5,7 @@
 use core::ops::Range;
 
 use super::AcquisitionError;
-use crate::signal::bitwise::planes::{AntennaPlanes, WORD_SAMPLES};
+use crate::signal::bitwise::planes::{tail_mask, AntennaPlanes, WORD_SAMPLES};
 
 /// The reference antenna's samples a search reads, from the first one searched.
 ///
@@ -16,7 +16,8 @@ use crate::signal::bitwise::planes::{AntennaPlanes, WORD_SAMPLES};
 #[derive(Clone, Copy, Debug)]
 pub enum SearchSamples<'a> {
     /// Decoded samples: in-phase `i`, quadrature `q` (`None` for real samples; at least as
-    /// long as `i`).
+    /// long as `i`). Made by [`SearchSamples::decoded`], which checks that.
+    #[non_exhaustive]
     Decoded {
         /// In-phase samples.
         i: &'a [i8],
@@ -117,12 +118,7 @@ fn plane_sum(signs: &[u32], mags: &[u32], n: usize) -> i64 {
     let words = n.div_ceil(WORD_SAMPLES);
     let (mut s, mut m, mut ms) = (0i64, 0i64, 0i64);
     for (w, &sw) in signs.iter().enumerate().take(words) {
-        let valid = n.saturating_sub(w.saturating_mul(WORD_SAMPLES));
-        let mask = if valid >= WORD_SAMPLES {
-            u32::MAX
-        } else {
-            (1u32 << valid) - 1
-        };
+        let mask = tail_mask(n, w);
         let (sw, mw) = (sw & mask, mags.get(w).copied().unwrap_or(0) & mask);
         s = s.saturating_add(i64::from(sw.count_ones()));
         m = m.saturating_add(i64::from(mw.count_ones()));
