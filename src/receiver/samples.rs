@@ -311,7 +311,9 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         }
         // The channels' satellites' cross-correlation in the background masks a weaker one.
         let mut masked = report.effective_ms < config.noncoherent_ms;
-        if result.detected {
+        // (No channel with code lock: nothing could explain it, and the check's direct
+        // correlation of the candidate, a sixth of a warm search's cost, is skipped.)
+        if result.detected && !known.is_empty() {
             // Not a satellite when the channels' satellites explain it as their
             // cross-correlation.
             let check = self.acquisition.cross_check(
