@@ -231,7 +231,8 @@ fn for_each_short_run(
     let mut current = words(w).map(|x| x.wrapping_shr(first_bit));
     let mut left = (WORD_SAMPLES as u32).wrapping_sub(first_bit);
     let mut k = range.start;
-    // (each pass takes at least one sample)
+    // (each pass takes at least one sample; the shifts stay below 32 and the differences
+    // non-negative: the wrapping forms only keep overflow checks out)
     while k < range.end {
         // the samples left in this bin: ⌈(2³² − frac) / step⌉, at most MAX_SHORT_RUN
         let whole = ((u32::MAX - frac) / step).saturating_add(1);

@@ -256,10 +256,11 @@ pub struct SearchReport {
 }
 
 /// Doppler bins that share one mix and forward FFT of each millisecond by default (the lanes
-/// of [`Acquisition`]): 1 keeps the engine's memory at `34·N` bytes plus the peaks (38 KiB
-/// for `N = 1024`); each further lane adds `4·N` bytes and saves most of a mix and an FFT
-/// per bin and millisecond (the flight computer's budget uses 4, the host 8).
-pub const DEFAULT_LANES: usize = 1;
+/// of [`Acquisition`]): 2 keep the engine's memory at `36·N` bytes plus the peaks (40 KB
+/// for `N = 1024`, what one lane took before the code's spectrum was packed into half);
+/// each further lane adds `4·N` bytes and saves most of a mix and an FFT per bin and
+/// millisecond (the flight computer's budget uses 4, the host 8).
+pub const DEFAULT_LANES: usize = 2;
 
 /// The acquisition engine with its fixed workspace (`N` bins per millisecond; `L` lanes:
 /// Doppler bins of one sub-bin offset searched together from one FFT of each millisecond,
@@ -270,7 +271,8 @@ pub struct Acquisition<const N: usize, const L: usize = DEFAULT_LANES> {
     fft: Fft<N>,
     /// The FFT's tables are built ([`Acquisition::build`]).
     built: bool,
-    code: [Complex; N],
+    /// The code's spectrum, packed (a real sequence's: half of it holds it all).
+    code: [f32; N],
     data: [Complex; N],
     /// The spectrum product of one bin, then its correlation.
     work: [Complex; N],
@@ -312,7 +314,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         Self {
             fft: Fft::blank(),
             built: false,
-            code: [[0.0; 2]; N],
+            code: [0.0; N],
             data: [[0.0; 2]; N],
             work: [[0.0; 2]; N],
             lanes: [[0.0; N]; L],

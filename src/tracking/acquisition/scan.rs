@@ -208,9 +208,11 @@ impl CodeWindow {
 }
 
 impl<const N: usize, const L: usize> Acquisition<N, L> {
-    /// The code of `prn` integrated over the `N` bins of one code period, transformed.
+    /// The code of `prn` integrated over the `N` bins of one code period, transformed (in
+    /// `self.work`) and kept as the half of its spectrum that a real sequence's holds
+    /// ([`pack_real_spectrum`]).
     pub(super) fn prepare_code(&mut self, prn: Prn) {
-        for (b, c) in self.code.iter_mut().enumerate() {
+        for (b, c) in self.work.iter_mut().enumerate() {
             let mut s = 0i32;
             for k in 0..CODE_SUBSAMPLES {
                 let chip = ((b * CODE_SUBSAMPLES + k) * CA_CODE_LENGTH) / (N * CODE_SUBSAMPLES);
@@ -218,7 +220,8 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             }
             *c = [s as f32 / CODE_SUBSAMPLES as f32, 0.0];
         }
-        self.fft.transform(&mut self.code, false);
+        self.fft.forward(&mut self.work);
+        pack_real_spectrum(&self.work, &mut self.code);
     }
 
     /// Scans the grid's Doppler bins: the strongest cell (within `window` if given), and the
@@ -361,7 +364,8 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             self.decimate(samples, m, doppler, config, dc);
             self.fft.transform(&mut self.data, false);
             self.excise();
-            for (d, c) in self.data.iter_mut().zip(self.code.iter()) {
+            unpack_real_spectrum(&self.code, &mut self.work);
+            for (d, c) in self.data.iter_mut().zip(self.work.iter()) {
                 // X · conj(C)
                 *d = [d[0] * c[0] + d[1] * c[1], d[1] * c[0] - d[0] * c[1]];
             }
@@ -814,21 +818,63 @@ fn take_chunk<const L: usize>(
 /// the same power, without conjugation passes.
 fn correlate_shifted<const N: usize>(
     x: &[Complex; N],
-    c: &[Complex; N],
+    code: &[f32; N],
     lines: i32,
     out: &mut [Complex; N],
 ) {
+    // the code's whole spectrum first, then each line multiplied in place
+    unpack_real_spectrum(code, out);
     // (N ≤ 8192: the modulo is exact in i64)
     let s = i64::from(lines).rem_euclid(N as i64) as usize;
     let s = s.min(N);
     // out[..N − s] from x[s..], out[N − s..] from x[..s]: two straight runs
     let (x_head, x_tail) = x.split_at(s);
     let (out_a, out_b) = out.split_at_mut(N - s);
-    let (c_a, c_b) = c.split_at(N - s);
-    for (runs_out, runs_x, runs_c) in [(out_a, x_tail, c_a), (out_b, x_head, c_b)] {
-        for ((o, d), c) in runs_out.iter_mut().zip(runs_x).zip(runs_c) {
+    for (runs_out, runs_x) in [(out_a, x_tail), (out_b, x_head)] {
+        for (o, d) in runs_out.iter_mut().zip(runs_x) {
+            let c = *o;
             *o = [d[0] * c[0] + d[1] * c[1], d[0] * c[1] - d[1] * c[0]];
         }
+    }
+}
+
+/// The spectrum `x` of a real sequence of `N` points packed into `N` values: `X[N − k]` is
+/// `conj(X[k])`, so `X[0]` and `X[N/2]` (real) and `X[1 … N/2 − 1]` hold it all, in
+/// `[Re X[0], Re X[N/2], Re X[1], Im X[1], …]` (half the memory of the whole spectrum).
+fn pack_real_spectrum<const N: usize>(x: &[Complex; N], packed: &mut [f32; N]) {
+    let half = N / 2;
+    let at = |k: usize| x.get(k).copied().unwrap_or([0.0; 2]);
+    for (k, pair) in (0..half).zip(packed.chunks_exact_mut(2)) {
+        let [re, im] = if k == 0 {
+            [at(0)[0], at(half)[0]]
+        } else {
+            at(k)
+        };
+        pair.copy_from_slice(&[re, im]);
+    }
+}
+
+/// `out` ← the whole spectrum that [`pack_real_spectrum`] packed.
+fn unpack_real_spectrum<const N: usize>(packed: &[f32; N], out: &mut [Complex; N]) {
+    let half = N / 2;
+    let (low, high) = out.split_at_mut(half.min(N));
+    for (k, (o, pair)) in (0..half).zip(low.iter_mut().zip(packed.chunks_exact(2))) {
+        *o = if k == 0 {
+            [pair[0], 0.0]
+        } else {
+            [pair[0], pair[1]]
+        };
+    }
+    if let (Some(nyquist), Some(&re)) = (high.first_mut(), packed.get(1)) {
+        *nyquist = [re, 0.0];
+    }
+    // X[N − k] = conj(X[k]) for k = 1 … N/2 − 1
+    for (o, pair) in high
+        .iter_mut()
+        .skip(1)
+        .zip(packed.chunks_exact(2).skip(1).rev())
+    {
+        *o = [pair[0], -pair[1]];
     }
 }
 
@@ -900,6 +946,35 @@ mod tests {
         assert!(mix(70_000.0).is_none() && mix(-70_000.0).is_none());
     }
 
+    /// A real sequence's spectrum packed into half of it and unpacked is its whole spectrum:
+    /// the lines `0 … N/2` as they were, the others their mirror's conjugates (equal to the
+    /// transform's own to f32 rounding).
+    #[test]
+    fn a_real_spectrum_packs_into_half_and_back() {
+        const N: usize = 1024;
+        let fft = Fft::<N>::new().unwrap();
+        let mut rng = SplitMix64::new(5);
+        let mut normal = StandardNormal::new();
+        let mut x = [[0.0f32; 2]; N];
+        for v in x.iter_mut() {
+            *v = [normal.sample(&mut rng), 0.0];
+        }
+        fft.forward(&mut x);
+        let (mut packed, mut whole) = ([0.0f32; N], [[0.0f32; 2]; N]);
+        pack_real_spectrum(&x, &mut packed);
+        unpack_real_spectrum(&packed, &mut whole);
+        assert_eq!(whole[0], [x[0][0], 0.0]);
+        assert_eq!(whole[N / 2], [x[N / 2][0], 0.0]);
+        assert_eq!(whole[1..N / 2], x[1..N / 2]);
+        let top = x
+            .iter()
+            .fold(0.0f32, |t, v| t.max(libm::hypotf(v[0], v[1])));
+        for (k, (a, b)) in whole.iter().zip(&x).enumerate() {
+            let err = libm::hypotf(a[0] - b[0], a[1] - b[1]);
+            assert!(err < 1e-5 * top, "line {k}: {a:?} vs {b:?}");
+        }
+    }
+
     /// A whole-line Doppler step as an index shift of the spectrum equals the explicit re-mix
     /// of the millisecond's bins with `e^{−j2π·lines·n/N}` and a new FFT, to f32 rounding.
     #[test]
@@ -914,7 +989,8 @@ mod tests {
         }
         let mut spectrum = x;
         fft.forward(&mut spectrum);
-        let ones = [[1.0f32, 0.0]; N];
+        let mut ones = [0.0f32; N];
+        pack_real_spectrum(&[[1.0f32, 0.0]; N], &mut ones);
         for lines in [-50i32, -7, -1, 0, 1, 13, 50] {
             let mut remixed = x;
             for (n, v) in remixed.iter_mut().enumerate() {
