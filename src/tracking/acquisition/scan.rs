@@ -545,12 +545,8 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
                 }
                 c.step(carrier, code);
             }
-            let idx = carrier_index(phase);
-            let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
             let bin = ((bin_acc >> 32) as usize) & (N - 1);
-            let d = &mut data[bin];
-            d[0] += x * c + y * s;
-            d[1] += y * c - x * s;
+            add_mixed(&mut data[bin], x, y, phase);
             phase = phase.wrapping_add(step);
             // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
             bin_acc = bin_acc.wrapping_add(bin_step);
@@ -672,6 +668,15 @@ fn strongest<const N: usize>(
     (local, local_at, top, top_at)
 }
 
+/// `d += (x + jy) · e^{−jφ}`, the carrier's phase `φ` a 32-bit word (the NCO's table).
+#[inline(always)]
+fn add_mixed(d: &mut Complex, x: f32, y: f32, phase: u32) {
+    let idx = carrier_index(phase);
+    let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
+    d[0] += x * c + y * s;
+    d[1] += y * c - x * s;
+}
+
 /// The carrier and bin counters of one millisecond's mix (see [`Acquisition::decimate`]).
 struct MixNco {
     phase: u32,
@@ -685,13 +690,10 @@ impl MixNco {
     /// bin.
     #[inline(always)]
     fn mix<const N: usize>(&mut self, data: &mut [Complex; N], x: f32, y: f32) {
-        let idx = carrier_index(self.phase);
-        let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
         // (32.32 fixed point: the bin is (bin_acc >> 32) mod N, which wrapping keeps)
         let bin = ((self.bin_acc >> 32) as usize) & (N - 1);
         if let Some(d) = data.get_mut(bin) {
-            d[0] += x * c + y * s;
-            d[1] += y * c - x * s;
+            add_mixed(d, x, y, self.phase);
         }
         self.phase = self.phase.wrapping_add(self.step);
         self.bin_acc = self.bin_acc.wrapping_add(self.bin_step);
@@ -738,11 +740,8 @@ impl BinMix {
     fn add_run<const N: usize>(&mut self, data: &mut [Complex; N], n: u32, x: f32, y: f32) {
         // first + step · (n − 1) / 2, the half taken on the signed turn
         let half_turn = (self.step.wrapping_mul(n.wrapping_sub(1)) as i32) >> 1;
-        let idx = carrier_index(self.phase.wrapping_add(half_turn as u32));
-        let (c, s) = (f32::from(COS_TABLE[idx]), f32::from(SIN_TABLE[idx]));
         if let Some(d) = data.get_mut(self.bin) {
-            d[0] += x * c + y * s;
-            d[1] += y * c - x * s;
+            add_mixed(d, x, y, self.phase.wrapping_add(half_turn as u32));
         }
         self.phase = self.phase.wrapping_add(self.step.wrapping_mul(n));
         self.bin = self.bin.wrapping_add(1) & (N - 1);
@@ -946,6 +945,25 @@ mod tests {
         assert!(mix(70_000.0).is_none() && mix(-70_000.0).is_none());
     }
 
+    /// `N` standard normal points from `seed`: complex, or real (imaginary parts 0).
+    fn gaussian_points<const N: usize>(seed: u64, complex: bool) -> [Complex; N] {
+        let mut rng = SplitMix64::new(seed);
+        let mut normal = StandardNormal::new();
+        let mut x = [[0.0f32; 2]; N];
+        for v in x.iter_mut() {
+            let re = normal.sample(&mut rng);
+            *v = [
+                re,
+                if complex {
+                    normal.sample(&mut rng)
+                } else {
+                    0.0
+                },
+            ];
+        }
+        x
+    }
+
     /// A real sequence's spectrum packed into half of it and unpacked is its whole spectrum:
     /// the lines `0 … N/2` as they were, the others their mirror's conjugates (equal to the
     /// transform's own to f32 rounding).
@@ -953,12 +971,7 @@ mod tests {
     fn a_real_spectrum_packs_into_half_and_back() {
         const N: usize = 1024;
         let fft = Fft::<N>::new().unwrap();
-        let mut rng = SplitMix64::new(5);
-        let mut normal = StandardNormal::new();
-        let mut x = [[0.0f32; 2]; N];
-        for v in x.iter_mut() {
-            *v = [normal.sample(&mut rng), 0.0];
-        }
+        let mut x = gaussian_points::<N>(5, false);
         fft.forward(&mut x);
         let (mut packed, mut whole) = ([0.0f32; N], [[0.0f32; 2]; N]);
         pack_real_spectrum(&x, &mut packed);
@@ -981,12 +994,7 @@ mod tests {
     fn an_index_shift_equals_an_explicit_remix() {
         const N: usize = 1024;
         let fft = Fft::<N>::new().unwrap();
-        let mut rng = SplitMix64::new(11);
-        let mut normal = StandardNormal::new();
-        let mut x = [[0.0f32; 2]; N];
-        for v in x.iter_mut() {
-            *v = [normal.sample(&mut rng), normal.sample(&mut rng)];
-        }
+        let x = gaussian_points::<N>(11, true);
         let mut spectrum = x;
         fft.forward(&mut spectrum);
         let mut ones = [0.0f32; N];
