@@ -471,6 +471,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let candidate = metric > threshold;
         let dwell = if candidate {
             self.verify(
+                prn,
                 samples,
                 doppler_hz,
                 code_phase_chips,
