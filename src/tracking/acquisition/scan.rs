@@ -712,9 +712,11 @@ const MAX_WINDOW_LAGS: usize = 19;
 /// [`CODE_SUBSAMPLES`] chips across the bin, in `−1 … 1`.
 fn integrated_chip<const N: usize>(prn: Prn, b: usize) -> f32 {
     let mut s = 0i32;
+    // (b < N ≤ 8192: the products stay far inside usize, the sum within ±8)
     for k in 0..CODE_SUBSAMPLES {
-        let chip = ((b * CODE_SUBSAMPLES + k) * CA_CODE_LENGTH) / (N * CODE_SUBSAMPLES);
-        s += i32::from(prn.chip(chip));
+        let sub = b.wrapping_mul(CODE_SUBSAMPLES).wrapping_add(k);
+        let chip = sub.wrapping_mul(CA_CODE_LENGTH) / (N * CODE_SUBSAMPLES);
+        s = s.wrapping_add(i32::from(prn.chip(chip)));
     }
     s as f32 / CODE_SUBSAMPLES as f32
 }
