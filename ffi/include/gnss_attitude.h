@@ -549,6 +549,19 @@ typedef struct {
   uint64_t opaque[GA_SAMPLE_RECEIVER_WORDS];
 } GaSampleReceiver;
 
+// The samples a search reads: `len` samples of the reference antenna at `i` (and `q`; null
+// for real samples), the first one receiver sample `first_sample`.
+typedef struct {
+  // In-phase (or real) samples.
+  const int8_t *i;
+  // Quadrature samples; null for real samples.
+  const int8_t *q;
+  // Samples at `i` (and at `q`).
+  size_t len;
+  // Receiver sample index of `i[0]`.
+  uint64_t first_sample;
+} GaSearchSamples;
+
 // A block of samples of the three antennas (one `int8_t` per sample and antenna, the
 // values the core's sample decoders produce): `q` all null for real (IF) samples.
 typedef struct {
@@ -801,8 +814,8 @@ GaStatus ga_sample_receiver_init(GaSampleReceiver *storage,
 GaReceiver *ga_sample_receiver_as_receiver(GaSampleReceiver *storage);
 
 // Searches `prn` in `len` samples of the reference antenna (`q` null for real samples)
-// starting at receiver sample `first_sample`; a detection starts a channel.
-// `*detected` is set to 1 on a detection, else 0.
+// starting at receiver sample `first_sample`, over the configured Doppler span about zero;
+// a detection starts a channel. `*detected` is set to 1 on a detection, else 0.
 //
 // # Safety
 // `storage` as for [`ga_sample_receiver_init`]; `i` (and `q` unless null) point to `len`
@@ -814,6 +827,20 @@ GaStatus ga_sample_receiver_search(GaSampleReceiver *storage,
                                    size_t len,
                                    uint64_t first_sample,
                                    uint8_t *detected);
+
+// [`ga_sample_receiver_search`] over the configured Doppler span about
+// `predicted_doppler_hz` (a warm start: the Doppler predicted from the almanac, time and
+// orbit, Hz; a non-finite one or one beyond ±60 kHz gives `GA_STATUS_ACQUISITION`, the
+// error record's kind saying which).
+//
+// # Safety
+// `storage` as for [`ga_sample_receiver_init`]; `samples.i` (and `samples.q` unless null)
+// point to `samples.len` samples; `detected` is writable.
+GaStatus ga_sample_receiver_search_near(GaSampleReceiver *storage,
+                                        uint8_t prn,
+                                        GaSearchSamples samples,
+                                        float predicted_doppler_hz,
+                                        uint8_t *detected);
 
 // Runs every channel over the block and feeds the receiver; `report` (nullable) gets what
 // the call did.

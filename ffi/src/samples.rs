@@ -8,9 +8,9 @@
 use core::mem::{align_of, size_of};
 
 use gnss_attitude::receiver::AdapterConfig;
-use gnss_attitude::receiver::{SampleFrontConfig, SampleReceiver};
+use gnss_attitude::receiver::{ReceiverError, SampleFrontConfig, SampleReceiver};
 use gnss_attitude::signal::{Prn, SampleBlock};
-use gnss_attitude::tracking::{AcquisitionConfig, ChannelConfig};
+use gnss_attitude::tracking::{AcquisitionConfig, ChannelConfig, SearchSamples};
 
 use crate::ptr;
 use crate::receiver::{
@@ -247,8 +247,8 @@ unsafe fn with_samples(
 }
 
 /// Searches `prn` in `len` samples of the reference antenna (`q` null for real samples)
-/// starting at receiver sample `first_sample`; a detection starts a channel.
-/// `*detected` is set to 1 on a detection, else 0.
+/// starting at receiver sample `first_sample`, over the configured Doppler span about zero;
+/// a detection starts a channel. `*detected` is set to 1 on a detection, else 0.
 ///
 /// # Safety
 /// `storage` as for [`ga_sample_receiver_init`]; `i` (and `q` unless null) point to `len`
@@ -263,8 +263,55 @@ pub unsafe extern "C" fn ga_sample_receiver_search(
     first_sample: u64,
     detected: *mut u8,
 ) -> GaStatus {
+    let samples = GaSearchSamples {
+        i,
+        q,
+        len,
+        first_sample,
+    };
+    // SAFETY: the caller's contract, the same as `ga_sample_receiver_search_near`'s.
+    unsafe { ga_sample_receiver_search_near(storage, prn, samples, 0.0, detected) }
+}
+
+/// The samples a search reads: `len` samples of the reference antenna at `i` (and `q`; null
+/// for real samples), the first one receiver sample `first_sample`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct GaSearchSamples {
+    /// In-phase (or real) samples.
+    pub i: *const i8,
+    /// Quadrature samples; null for real samples.
+    pub q: *const i8,
+    /// Samples at `i` (and at `q`).
+    pub len: usize,
+    /// Receiver sample index of `i[0]`.
+    pub first_sample: u64,
+}
+
+/// [`ga_sample_receiver_search`] over the configured Doppler span about
+/// `predicted_doppler_hz` (a warm start: the Doppler predicted from the almanac, time and
+/// orbit, Hz; a non-finite one or one beyond ±60 kHz gives `GA_STATUS_ACQUISITION`, the
+/// error record's kind saying which).
+///
+/// # Safety
+/// `storage` as for [`ga_sample_receiver_init`]; `samples.i` (and `samples.q` unless null)
+/// point to `samples.len` samples; `detected` is writable.
+#[no_mangle]
+pub unsafe extern "C" fn ga_sample_receiver_search_near(
+    storage: *mut GaSampleReceiver,
+    prn: u8,
+    samples: GaSearchSamples,
+    predicted_doppler_hz: f32,
+    detected: *mut u8,
+) -> GaStatus {
     let call = GaCall::Search;
     let abi = |s| Failure::abi(s, call);
+    let GaSearchSamples {
+        i,
+        q,
+        len,
+        first_sample,
+    } = samples;
     // SAFETY: the caller's contract.
     let i = unsafe { ptr::slice(i, len) };
     // SAFETY: the caller's contract (q may be null: real samples).
@@ -275,8 +322,9 @@ pub unsafe extern "C" fn ga_sample_receiver_search(
             let i = i.map_err(abi)?;
             let q = q.transpose().map_err(abi)?;
             let prn = Prn::new(prn).ok_or(abi(GaStatus::InvalidInput))?;
-            let r = rx
-                .search(prn, i, q, first_sample)
+            let r = SearchSamples::decoded(i, q)
+                .map_err(ReceiverError::from)
+                .and_then(|s| rx.search_samples_near(prn, s, first_sample, predicted_doppler_hz))
                 .map_err(|e| Failure::receiver(e, call, 0))?;
             // (inside the caller's unsafe block) the caller's contract: `detected` is
             // writable and not part of the storage
@@ -379,5 +427,103 @@ pub unsafe extern "C" fn ga_sample_receiver_release(
                 GaStatus::Empty
             })
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{ga_example_config, ga_receiver_last_error, GaError, GA_KIND_NON_FINITE};
+    use gnss_attitude::signal::CA_CHIP_RATE_HZ;
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    const FS: f64 = 2.6e6;
+
+    /// Complex samples of PRN 7 at `doppler_hz`, code phase 300 chips, in noise (σ 8 LSB,
+    /// amplitude 3 LSB: about 46 dB-Hz), for `n` samples.
+    fn satellite(doppler_hz: f64, n: usize) -> (Vec<i8>, Vec<i8>) {
+        let prn = Prn::new(7).unwrap();
+        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut gaussian = || {
+            // a sum of four uniforms, scaled to σ = 1
+            let mut s = 0.0;
+            for _ in 0..4 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                s += (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            }
+            s * 3f64.sqrt()
+        };
+        (0..n)
+            .map(|k| {
+                let t = k as f64 / FS;
+                let chip = (300.0 + t * CA_CHIP_RATE_HZ) as usize % 1023;
+                let c = f64::from(prn.chip(chip));
+                let ph = core::f64::consts::TAU * doppler_hz * t;
+                let x = 3.0 * c * ph.cos() + 8.0 * gaussian();
+                let y = 3.0 * c * ph.sin() + 8.0 * gaussian();
+                (x.round() as i8, y.round() as i8)
+            })
+            .unzip()
+    }
+
+    /// Through the C ABI, a warm search: a satellite at +3.32 kHz is outside the ±1 kHz span
+    /// about zero (`ga_sample_receiver_search`: not detected) and inside it about a predicted
+    /// +3 kHz (`ga_sample_receiver_search_near`: detected); a NaN prediction is refused as an
+    /// acquisition failure whose record says non-finite.
+    #[test]
+    fn a_warm_search_through_the_c_abi_finds_the_satellite_about_its_prediction() {
+        let mut config = core::mem::MaybeUninit::<crate::GaConfig>::uninit();
+        let mut front = core::mem::MaybeUninit::<GaSampleFrontConfig>::uninit();
+        // SAFETY: both outputs are writable.
+        let (config, mut front) = unsafe {
+            assert_eq!(ga_example_config(0, config.as_mut_ptr()), GaStatus::Ok);
+            let s = ga_sample_front_config_leo_complex(FS, front.as_mut_ptr());
+            assert_eq!(s, GaStatus::Ok);
+            (config.assume_init(), front.assume_init())
+        };
+        front.doppler_max_hz = 1000.0;
+        let mut rx = Box::new(GaSampleReceiver {
+            opaque: [0; GA_SAMPLE_RECEIVER_WORDS],
+        });
+        let rx: *mut GaSampleReceiver = &mut *rx;
+        // SAFETY: `rx` is this test's storage; the configurations are the structs above.
+        let status = unsafe { ga_sample_receiver_init(rx, &config, &front) };
+        assert_eq!(status, GaStatus::Ok);
+        let n = front.to_core().acquisition.samples_needed();
+        let (i, q) = satellite(3320.0, n);
+        let samples = GaSearchSamples {
+            i: i.as_ptr(),
+            q: q.as_ptr(),
+            len: n,
+            first_sample: 0,
+        };
+        let mut detected = 9u8;
+        // SAFETY: the samples point to `n` samples each; `detected` is writable.
+        let status =
+            unsafe { ga_sample_receiver_search(rx, 7, samples.i, samples.q, n, 0, &mut detected) };
+        assert_eq!((status, detected), (GaStatus::Ok, 0));
+        // SAFETY: as above.
+        let status =
+            unsafe { ga_sample_receiver_search_near(rx, 7, samples, 3000.0, &mut detected) };
+        assert_eq!((status, detected), (GaStatus::Ok, 1));
+        // SAFETY: as above.
+        let status =
+            unsafe { ga_sample_receiver_search_near(rx, 9, samples, f32::NAN, &mut detected) };
+        assert_eq!(status, GaStatus::Acquisition);
+        let mut error = core::mem::MaybeUninit::<GaError>::uninit();
+        // SAFETY: a sample receiver's storage is a receiver's (`ga_sample_receiver_as_receiver`
+        // documents it); `error` is writable.
+        let error = unsafe {
+            let as_receiver = ga_sample_receiver_as_receiver(rx);
+            assert_eq!(
+                ga_receiver_last_error(as_receiver, error.as_mut_ptr()),
+                GaStatus::Ok
+            );
+            error.assume_init()
+        };
+        assert_eq!(error.source_kind, GA_KIND_NON_FINITE, "{error:?}");
     }
 }

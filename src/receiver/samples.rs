@@ -288,12 +288,33 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         samples: SearchSamples<'_>,
         first_sample: u64,
     ) -> Result<SearchResult, ReceiverError> {
+        self.search_samples_near(prn, samples, first_sample, 0.0)
+    }
+
+    /// [`Self::search_samples`] over the configuration's `±doppler_max_hz` about
+    /// `predicted_doppler_hz` (a warm start: the Doppler predicted from the almanac, time and
+    /// orbit; [`Acquisition::search_report_near`]), the second look included.
+    ///
+    /// # Errors
+    /// As [`Self::search`]; [`ReceiverError::Acquisition`] also for a non-finite prediction
+    /// or one beyond [`crate::tracking::acquisition::MAX_DOPPLER_CENTRE_HZ`].
+    pub fn search_samples_near(
+        &mut self,
+        prn: Prn,
+        samples: SearchSamples<'_>,
+        first_sample: u64,
+        predicted_doppler_hz: f32,
+    ) -> Result<SearchResult, ReceiverError> {
         let config = self.config.acquisition;
         // (built at the first search: see `with_settings`)
         self.acquisition.build()?;
-        let report = self
-            .acquisition
-            .search_report(prn, samples, first_sample, &config)?;
+        let report = self.acquisition.search_report_near(
+            prn,
+            samples,
+            first_sample,
+            &config,
+            predicted_doppler_hz,
+        )?;
         let mut result = report.result;
         if self.tracks(prn) {
             return Ok(result);
@@ -328,8 +349,16 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         }
         // (Not when interference was found: it makes a background of its own.)
         if !result.detected && masked && !report.interference && !known.is_empty() {
+            let threshold = report.result.threshold;
             result = self
-                .second_look(prn, samples, first_sample, &known, report.result.threshold)?
+                .second_look(
+                    prn,
+                    samples,
+                    first_sample,
+                    &known,
+                    threshold,
+                    predicted_doppler_hz,
+                )?
                 .unwrap_or(result);
         }
         if result.detected {
@@ -342,7 +371,8 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     /// samples: its result when it detects a satellite whose metric passes the first
     /// search's `first_threshold` too (the cancellation lowers the background's spread, not a
     /// tone's tail) and that keeps its power with them cancelled
-    /// ([`Acquisition::cancellation_check`]), `None` otherwise.
+    /// ([`Acquisition::cancellation_check`]), `None` otherwise; about the first search's
+    /// `predicted_doppler_hz`.
     fn second_look(
         &mut self,
         prn: Prn,
@@ -350,14 +380,16 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
         first_sample: u64,
         known: &[KnownSignal],
         first_threshold: f32,
+        predicted_doppler_hz: f32,
     ) -> Result<Option<SearchResult>, ReceiverError> {
         let config = self.config.acquisition;
-        let again = self.acquisition.search_report_cancelling(
+        let again = self.acquisition.search_report_cancelling_near(
             prn,
             samples,
             first_sample,
             &config,
             known,
+            predicted_doppler_hz,
         )?;
         if !again.result.detected || !(again.result.metric > first_threshold) {
             return Ok(None);

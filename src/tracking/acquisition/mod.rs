@@ -6,7 +6,8 @@
 //! # Method
 //! The mean of the samples searched is removed first (a DC offset, a constant or saturated
 //! input would otherwise correlate with every code at the Doppler bins near multiples of
-//! 1 kHz). For each Doppler bin `f` (from `−f_max` to `+f_max` in steps of `Δf`) and each of
+//! 1 kHz). For each Doppler bin `f` (from `−f_max` to `+f_max` in steps of `Δf`, about zero, or
+//! about the predicted Doppler for a warm start: [`Acquisition::search_report_near`]) and each of
 //! `K` milliseconds: the samples are mixed with `e^{−j2π(f_IF + f)t}` (the carrier table of
 //! the correlator) and integrated-and-dumped into `N` bins per millisecond (`N` a power of two
 //! ≥ 1024: 0.5 chip per bin for `N = 2048`); the `N`-point FFT of that, with the lines above
@@ -100,6 +101,11 @@ pub const MAX_NONCOHERENT_MS: u16 = 200;
 /// Code distance from a Doppler bin's peak within which cells are left out of the background
 /// statistics, chips (the correlation triangle is ±1 chip wide).
 pub const FLOOR_GUARD_CHIPS: f32 = 1.5;
+
+/// Largest predicted Doppler a search may be centred on
+/// ([`Acquisition::search_report_near`]), Hz: a LEO satellite's Doppler stays within
+/// ±45 kHz, its oscillator's offset adds a few kHz.
+pub const MAX_DOPPLER_CENTRE_HZ: f32 = 60_000.0;
 
 /// False-alarm probability of the verification dwell over its cells.
 pub const VERIFICATION_FALSE_ALARM: f64 = 1e-3;
@@ -444,14 +450,59 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         config: &AcquisitionConfig,
         known: &[KnownSignal],
     ) -> Result<SearchReport, AcquisitionError> {
+        self.search_report_cancelling_near(prn, samples, first_sample, config, known, 0.0)
+    }
+
+    /// [`Acquisition::search_report`] over `±doppler_max_hz` about `predicted_doppler_hz`
+    /// instead of about zero: a warm start's search, the Doppler predicted from the almanac,
+    /// time and orbit (its error, the oscillator's offset included, within the span). The
+    /// threshold counts the same cells, so the false-alarm probability is unchanged.
+    ///
+    /// # Errors
+    /// As [`Acquisition::search`], and [`AcquisitionError::NonFinite`] for a non-finite
+    /// prediction, [`AcquisitionError::InvalidConfig`] for one beyond
+    /// [`MAX_DOPPLER_CENTRE_HZ`].
+    pub fn search_report_near(
+        &mut self,
+        prn: Prn,
+        samples: SearchSamples<'_>,
+        first_sample: u64,
+        config: &AcquisitionConfig,
+        predicted_doppler_hz: f32,
+    ) -> Result<SearchReport, AcquisitionError> {
+        self.search_report_cancelling_near(
+            prn,
+            samples,
+            first_sample,
+            config,
+            &[],
+            predicted_doppler_hz,
+        )
+    }
+
+    /// [`Acquisition::search_report_cancelling`] about `predicted_doppler_hz`
+    /// ([`Acquisition::search_report_near`]).
+    ///
+    /// # Errors
+    /// As [`Acquisition::search_report_cancelling`] and [`Acquisition::search_report_near`].
+    pub fn search_report_cancelling_near(
+        &mut self,
+        prn: Prn,
+        samples: SearchSamples<'_>,
+        first_sample: u64,
+        config: &AcquisitionConfig,
+        known: &[KnownSignal],
+        predicted_doppler_hz: f32,
+    ) -> Result<SearchReport, AcquisitionError> {
         self.check_built()?;
         check_inputs(samples, config)?;
+        check_centre(predicted_doppler_hz)?;
         check_known(known)?;
         let dc = samples.mean(config.samples_needed());
         self.prepare_interference(samples, config, dc);
         self.set_cancellation(prn, known, samples, config, dc);
         self.prepare_code(prn);
-        let grid = scan::Grid::search(config);
+        let grid = scan::Grid::search(config, predicted_doppler_hz);
         let (peak, floor) = self.scan(samples, &grid, None, config, dc);
         let k = config.noncoherent_ms;
         let effective_ms = floor.effective_ms(k);
@@ -515,6 +566,17 @@ fn check_inputs(
     Ok(())
 }
 
+/// Refuses a non-finite Doppler centre, or one beyond [`MAX_DOPPLER_CENTRE_HZ`].
+fn check_centre(centre_hz: f32) -> Result<(), AcquisitionError> {
+    if !centre_hz.is_finite() {
+        Err(AcquisitionError::NonFinite)
+    } else if centre_hz.abs() > MAX_DOPPLER_CENTRE_HZ {
+        Err(AcquisitionError::InvalidConfig)
+    } else {
+        Ok(())
+    }
+}
+
 /// Refuses known signals with a non-finite Doppler or code phase.
 fn check_known(known: &[KnownSignal]) -> Result<(), AcquisitionError> {
     if known
@@ -575,12 +637,14 @@ fn ln_factorial_below(k: usize) -> f64 {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum AcquisitionError {
-    /// A configuration value, a candidate, a known signal or a margin was NaN or infinite.
+    /// A configuration value, a predicted Doppler, a candidate, a known signal or a margin
+    /// was NaN or infinite.
     #[error("non-finite acquisition configuration")]
     NonFinite,
     /// The configuration is out of range (sample rate outside 1.023–64 MHz, IF beyond the
     /// sample rate, Doppler step below 10 Hz, more Doppler bins than the engine holds, zero or
-    /// too many milliseconds, a false-alarm probability outside (0, 0.5)), or the engine's
+    /// too many milliseconds, a false-alarm probability outside (0, 0.5), a predicted
+    /// Doppler beyond [`MAX_DOPPLER_CENTRE_HZ`]), or the engine's
     /// FFT size is not a power of two in 1024–8192.
     #[error("acquisition configuration out of range")]
     InvalidConfig,
@@ -774,6 +838,37 @@ mod tests {
         assert_eq!(r.result.threshold, classic);
         assert!((r.result.doppler_hz - 420.0).abs() < 150.0, "{r:?}");
         assert!((r.result.code_phase_chips - 300.2).abs() < 0.5, "{r:?}");
+    }
+
+    /// A warm start: a satellite at +3.32 kHz lies outside the search's ±1 kHz about zero
+    /// (not detected) and inside it about the predicted +3.0 kHz (detected at its Doppler and
+    /// code phase, against the same threshold: the same number of cells). A prediction that
+    /// is not finite, or beyond any LEO Doppler, is refused.
+    #[test]
+    fn a_warm_search_about_the_predicted_doppler_finds_what_the_cold_span_misses() {
+        let (i, q) = samples(&[(7, 3.0, 3320.0, 300.2)], 8.0, (0.0, 0.0), 1);
+        let about_zero = engine()
+            .search_report(prn(7), cx(&i, &q), 0, &config())
+            .unwrap();
+        assert!(!about_zero.result.detected, "{about_zero:?}");
+        let near = engine()
+            .search_report_near(prn(7), cx(&i, &q), 0, &config(), 3000.0)
+            .unwrap();
+        assert!(near.result.detected, "{near:?}");
+        assert_eq!(near.result.threshold, about_zero.result.threshold);
+        assert!((near.result.doppler_hz - 3320.0).abs() < 150.0, "{near:?}");
+        assert!(
+            (near.result.code_phase_chips - 300.2).abs() < 0.5,
+            "{near:?}"
+        );
+        for (centre, refused) in [
+            (f32::NAN, AcquisitionError::NonFinite),
+            (f32::INFINITY, AcquisitionError::NonFinite),
+            (1.0e5, AcquisitionError::InvalidConfig),
+        ] {
+            let r = engine().search_report_near(prn(7), cx(&i, &q), 0, &config(), centre);
+            assert_eq!(r, Err(refused), "centre {centre}");
+        }
     }
 
     /// A blank engine refuses to search until it is built; built in place, it searches as

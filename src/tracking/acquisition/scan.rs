@@ -49,11 +49,11 @@ pub(super) struct Grid {
 }
 
 impl Grid {
-    /// The search's grid: `±doppler_max` in `doppler_step` bins over the first `K` ms.
-    pub(super) fn search(config: &AcquisitionConfig) -> Self {
+    /// The search's grid: `centre ± doppler_max` in `doppler_step` bins over the first `K` ms.
+    pub(super) fn search(config: &AcquisitionConfig, centre_hz: f32) -> Self {
         let bins = config.doppler_bins();
         Self {
-            first_hz: -((bins / 2) as f32) * config.doppler_step_hz,
+            first_hz: centre_hz - (bins / 2) as f32 * config.doppler_step_hz,
             step_hz: config.doppler_step_hz,
             bins,
             first_ms: 0,
@@ -1232,7 +1232,7 @@ mod tests {
             let (i, q) = satellite(p, 2.0, f, tau, 8.0, config.search_samples());
             let mut shared = Acquisition::<1024, 4>::new().unwrap();
             shared.prepare_code(Prn::new(p).unwrap());
-            let grid = Grid::search(&config);
+            let grid = Grid::search(&config, 0.0);
             let (peak, _) = shared.scan(cx(&i, &q), &grid, None, &config, [0.0; 2]);
             let mut reference = Acquisition::<1024, 1>::new().unwrap();
             reference.prepare_code(Prn::new(p).unwrap());

@@ -15,7 +15,7 @@ use gnss_attitude::tracking::SearchSamples;
 
 use super::frontend::{FrontEnd, SM2IQ};
 use super::memory;
-use super::synth::{Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
+use super::synth::{predicted_doppler_hz, Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
 
 /// Channels (one per satellite; each tracks the three antennas).
 pub const CHANNELS: usize = 8;
@@ -75,14 +75,14 @@ fn count<R>(f: impl FnOnce() -> R) -> (u32, R) {
     (n, black_box(out))
 }
 
-/// The front half's configuration: complex 2.6 Msps, LEO channels, a warm search (Doppler
-/// within ±2.5 kHz, [`ACQUISITION_MS`] non-coherent: the flight computer knows the almanac, time and
-/// orbit), false alarms 10⁻³ per PRN search; the slaved antennas prompt only (paper 003's
+/// The front half's configuration: complex 2.6 Msps, LEO channels, a warm search (±2 kHz
+/// about the flight computer's predicted Doppler, [`predicted_doppler_hz`]: it knows the
+/// almanac, time and orbit, not its oscillator's offset; [`ACQUISITION_MS`] non-coherent), false alarms 10⁻³ per PRN search; the slaved antennas prompt only (paper 003's
 /// filter needs no more of them; the adapter scales their prompts by the reference antenna's
 /// noise, equal to theirs behind a quantizer's AGC).
 pub fn front_config() -> SampleFrontConfig {
     let mut c = SampleFrontConfig::leo_complex(SAMPLE_RATE_HZ);
-    c.acquisition.doppler_max_hz = 2500.0;
+    c.acquisition.doppler_max_hz = 2000.0;
     c.acquisition.noncoherent_ms = ACQUISITION_MS;
     c.acquisition.false_alarm_probability = 1e-3;
     c.channel.slave_taps = SlaveTaps::Prompt;
@@ -164,7 +164,8 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
         }
     }
     let samples = SearchSamples::Planes(collected.planes());
-    let search_all = || SKY.map(|(prn, _, _)| Prn::new(prn).map(|prn| rx.search_samples(prn, samples, first)));
+    let mut search = |s: usize, prn: u8| Prn::new(prn).map(|prn| rx.search_samples_near(prn, samples, first, predicted_doppler_hz(s)));
+    let search_all = || core::array::from_fn::<_, { SKY.len() }, _>(|s| SKY.get(s).and_then(|&(prn, _, _)| search(s, prn)));
     let (region, results) = count(search_all);
     let mut detected = 0;
     for (s, result) in results.iter().enumerate() {
@@ -172,12 +173,13 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
             Some(Ok(r)) => {
                 detected += usize::from(r.detected);
                 hprintln!(
-                    "realtime {}: search PRN {}: detected {} Doppler {} Hz (truth {}), code phase {} chips (truth {})",
+                    "realtime {}: search PRN {}: detected {} Doppler {} Hz (truth {}, predicted {}), code phase {} chips (truth {})",
                     front_end.name(),
                     r.prn.number(),
                     r.detected,
                     r.doppler_hz,
                     DOPPLER_HZ[s],
+                    predicted_doppler_hz(s),
                     r.code_phase_chips,
                     CODE_PHASE_CHIPS[s]
                 );
@@ -186,7 +188,7 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
             None => hprintln!("realtime {}: sky entry {} is no PRN", front_end.name(), s),
         }
     }
-    hprintln!("realtime {}: acquisition region {}: {} of {} PRNs detected (+-2.5 kHz, {} ms non-coherent, on bit planes)", front_end.name(), region, detected, SKY.len(), ACQUISITION_MS);
+    hprintln!("realtime {}: acquisition region {}: {} of {} PRNs detected (+-2 kHz about the predicted Doppler, {} ms non-coherent, on bit planes)", front_end.name(), region, detected, SKY.len(), ACQUISITION_MS);
     detected
 }
 

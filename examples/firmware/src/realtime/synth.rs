@@ -33,6 +33,23 @@ pub const SAMPLES_PER_MS: usize = 2600;
 pub const CN0_DBHZ: f32 = 45.0;
 /// Doppler of the eight satellites of [`SKY`] (constant), Hz.
 pub const DOPPLER_HZ: [f64; 8] = [1250.0, -730.0, 1840.0, -1620.0, 310.0, -2110.0, 960.0, -180.0];
+/// The receiver oscillator's frequency offset as it shows in every Doppler, Hz (0.44 ppm of
+/// L1, a TCXO's): in the samples ([`DOPPLER_HZ`] includes it), unknown to the flight computer.
+pub const OSCILLATOR_OFFSET_HZ: f64 = 700.0;
+/// The flight computer's error in each satellite's predicted geometric Doppler (almanac, time
+/// and orbit), Hz.
+pub const ORBIT_ERROR_HZ: [f64; 8] = [35.0, -20.0, 55.0, -45.0, 10.0, -60.0, 25.0, -5.0];
+
+/// The warm start's prediction of satellite `s`'s Doppler, Hz: the geometric Doppler the
+/// flight computer predicts, without the oscillator's offset and with its orbit error
+/// (0 for an index beyond the sky).
+pub fn predicted_doppler_hz(s: usize) -> f32 {
+    match (DOPPLER_HZ.get(s), ORBIT_ERROR_HZ.get(s)) {
+        (Some(d), Some(e)) => (d - OSCILLATOR_OFFSET_HZ + e) as f32,
+        _ => 0.0,
+    }
+}
+
 /// Code phase of the eight satellites at sample 0, chips.
 pub const CODE_PHASE_CHIPS: [f64; 8] = [17.3, 905.6, 412.0, 233.9, 688.2, 1001.4, 96.7, 540.5];
 /// Carrier phase of the eight satellites at sample 0 (array origin), cycles.
