@@ -689,6 +689,43 @@ mod tests {
         assert_eq!(rx.channels().count(), 1);
     }
 
+    /// A warm start: a satellite at +3.3 kHz, outside the ±1 kHz span about zero, is not
+    /// found by `search` (no channel) and is found about its predicted +3 kHz by
+    /// `search_samples_near`, which starts its channel.
+    #[test]
+    fn a_warm_search_about_the_predicted_doppler_starts_the_channel() {
+        use crate::noise::{SplitMix64, StandardNormal};
+        const FS: f64 = 1.023e6;
+        let mut rx = front();
+        let prn = Prn::new(11).unwrap();
+        let n = rx.config.acquisition.samples_needed();
+        let (mut rng, mut normal) = (SplitMix64::new(3), StandardNormal::new());
+        let (mut i, mut q) = (
+            heapless::Vec::<i8, 4200>::new(),
+            heapless::Vec::<i8, 4200>::new(),
+        );
+        for k in 0..n {
+            let t = k as f64 / FS;
+            let chip = (250.0 + t * crate::signal::CA_CHIP_RATE_HZ) as usize % 1023;
+            let c = f64::from(prn.chip(chip));
+            let phase = core::f64::consts::TAU * 3300.0 * t;
+            let x = 4.0 * c * libm::cos(phase) + 8.0 * f64::from(normal.sample(&mut rng));
+            let y = 4.0 * c * libm::sin(phase) + 8.0 * f64::from(normal.sample(&mut rng));
+            i.push(libm::round(x) as i8).unwrap();
+            q.push(libm::round(y) as i8).unwrap();
+        }
+        let cold = rx.search(prn, &i, Some(&q), 0).unwrap();
+        assert!(!cold.detected && !rx.tracks(prn), "{cold:?}");
+        let samples = SearchSamples::decoded(&i, Some(&q)).unwrap();
+        let warm = rx.search_samples_near(prn, samples, 0, 3000.0).unwrap();
+        assert!(warm.detected && rx.tracks(prn), "{warm:?}");
+        assert!((warm.doppler_hz - 3300.0).abs() < 250.0, "{warm:?}");
+        assert_eq!(
+            rx.search_samples_near(prn, samples, 0, f32::NAN),
+            Err(ReceiverError::Acquisition(AcquisitionError::NonFinite))
+        );
+    }
+
     #[test]
     fn a_search_on_too_few_samples_is_a_typed_error() {
         let mut rx = front();
