@@ -673,8 +673,8 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let (mut best, mut noise) = (0.0f32, 0.0f32);
         for b in 0..grid.bins {
             let mut cells = [0.0f32; MAX_WINDOW_LAGS];
+            let doppler = grid.doppler(b);
             for m in 0..usize::from(config.noncoherent_ms) {
-                let doppler = grid.doppler(b);
                 self.decimate(
                     samples,
                     grid.first_ms.saturating_add(m),
