@@ -128,7 +128,7 @@ impl<const D: usize> LagSums<D> {
         let n0 = n0 % CA_CODE_LENGTH;
         let mut phasors = offsets_hz.map(|f| ChipPhasor::new(f, frac));
         let mut sums = [[(0.0f32, 0.0f32); D]; LAG_WINDOW];
-        let (ca, cb) = (a.code_signs(), b.code_signs());
+
         // the next chip index, wrapped by one comparison (indices stay below 1023; wrapping
         // arithmetic, so that no overflow check is left for the optimizer to discharge)
         let next = |i: usize| {
@@ -145,8 +145,8 @@ impl<const D: usize> LagSums<D> {
             *i = (j + n0 + l) % CA_CODE_LENGTH;
         }
         for _ in 0..CA_CODE_LENGTH {
-            let x = f32::from(ca.get(j).copied().unwrap_or(1));
-            let products = jb.map(|i| x * f32::from(cb.get(i).copied().unwrap_or(1)));
+            let x = f32::from(a.chip(j));
+            let products = jb.map(|i| x * f32::from(b.chip(i)));
             for (d, ph) in phasors.iter_mut().enumerate() {
                 for (lag, &p) in sums.iter_mut().zip(&products) {
                     if let Some(s) = lag.get_mut(d) {
@@ -317,6 +317,7 @@ pub fn near_khz_multiple(a_hz: f32, b_hz: f32, tolerance_hz: f32) -> bool {
 /// The test of the module documentation: is `victim` explained by the cross-correlation of
 /// the stronger ones among `others` (entries with the victim's PRN are skipped; at most
 /// [`MAX_OTHERS`] are considered)? Bounded: see the module documentation.
+#[cfg_attr(feature = "optimize-hot", optimize(speed))]
 pub fn cross_correlation_source(
     victim: &SignalProbe,
     others: &[SignalProbe],

@@ -37,6 +37,8 @@
 mod frontend;
 #[path = "realtime/memory.rs"]
 mod memory;
+#[path = "realtime/fixed.rs"]
+mod fixed;
 #[path = "realtime/run.rs"]
 mod run;
 #[path = "realtime/synth.rs"]
@@ -78,8 +80,8 @@ fn main() -> ! {
             o.counted_ms,
             o.fine_at,
             o.source,
-            o.error_deg,
-            run::LIMIT_DEG,
+            fixed::fixed(o.error_deg, 4),
+            fixed::fixed(run::LIMIT_DEG, 2),
             if o.pass { "PASS" } else { "FAIL" }
         );
         all &= o.pass;

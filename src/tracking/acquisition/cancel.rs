@@ -95,8 +95,9 @@ impl Cancelled {
     /// The replica's chip sign at code phase word `code`.
     #[inline(always)]
     pub(super) fn chip(&self, code: u64) -> f32 {
-        let signs = self.prn.code_signs();
-        f32::from(signs.get((code >> 32) as usize).copied().unwrap_or(1))
+        // (the packed bits, not the 32 KiB sign table: a firmware that never runs the `i8`
+        // correlator links neither; `code < CODE_WRAP`, so the chip is below 1023)
+        f32::from(self.prn.chip((code >> 32) as usize))
     }
 
     /// Advances the phase words by one sample.

@@ -13,6 +13,7 @@ use gnss_attitude::signal::nco::CodeNco;
 use gnss_attitude::signal::{BitSettings, Prn, SlaveTaps, CA_CHIP_RATE_HZ};
 use gnss_attitude::tracking::SearchSamples;
 
+use super::fixed::fixed;
 use super::frontend::{FrontEnd, SM2IQ};
 use super::memory;
 use super::synth::{predicted_doppler_hz, Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
@@ -177,11 +178,11 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
                     front_end.name(),
                     r.prn.number(),
                     r.detected,
-                    r.doppler_hz,
-                    DOPPLER_HZ[s],
-                    predicted_doppler_hz(s),
-                    r.code_phase_chips,
-                    CODE_PHASE_CHIPS[s]
+                    fixed(r.doppler_hz, 1),
+                    fixed(DOPPLER_HZ[s], 1),
+                    fixed(predicted_doppler_hz(s), 1),
+                    fixed(r.code_phase_chips, 3),
+                    fixed(CODE_PHASE_CHIPS[s], 3)
                 );
             }
             Some(Err(e)) => hprintln!("realtime {}: search of sky entry {} refused: {:?}", front_end.name(), s, e),
@@ -344,7 +345,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         if out.fine_at.is_some() && (e0 + BLOCK_MS as u64) % 100 == 0 {
             let e = att.q_rb.angle_to(&synth.truth(att.epoch)).to_degrees();
             let sigma = nalgebra::ComplexField::sqrt(att.covariance.trace().max(0.0)).to_degrees();
-            hprintln!("realtime {}: epoch {} source {:?} error {} deg (1 sigma {} deg)", front_end.name(), att.epoch, att.source, e, sigma);
+            hprintln!("realtime {}: epoch {} source {:?} error {} deg (1 sigma {} deg)", front_end.name(), att.epoch, att.source, fixed(e, 4), fixed(sigma, 4));
         }
         if out.counted_ms >= COUNT_MS {
             break;
@@ -372,7 +373,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         detected,
         SKY.len(),
         rx.channels().filter(|c| c.locked).count(),
-        cn0,
+        fixed(cn0, 1),
         total.observations,
         total.late,
         total.without_aiding,

@@ -70,8 +70,8 @@ const TABLE: usize = 256;
 
 /// One satellite's generator state.
 struct Satellite {
-    /// ±1 chips of its C/A code.
-    code: &'static [i8; 1024],
+    /// Its C/A code.
+    prn: Prn,
     /// Code phase, chips in 32.32 fixed point, in `[0, 1023·2³²)`.
     code_phase: u64,
     /// Code phase step per sample, 32.32 chips.
@@ -123,7 +123,7 @@ impl Synth {
             let prn = Prn::new(SKY[s].0).unwrap_or(Prn::FIRST);
             let code_rate = CHIP_RATE_HZ * (1.0 + doppler / L1_HZ);
             Satellite {
-                code: prn.code_signs(),
+                prn,
                 code_phase: (CODE_PHASE_CHIPS[s] * TWO_32) as u64,
                 code_step: (code_rate / SAMPLE_RATE_HZ * TWO_32 + 0.5) as u64,
                 periods: 0,
@@ -245,7 +245,7 @@ impl Synth {
                 let a = self.amplitude;
                 for k in 0..n {
                     let chip = (sat.code_phase >> 32) as usize;
-                    let v = a * sat.bit * f32::from(sat.code[chip & 1023]);
+                    let v = a * sat.bit * f32::from(sat.prn.chip(chip));
                     for p in 0..antennas {
                         let ph = sat.carrier.wrapping_add(sat.offset[p]) >> 24;
                         re[p][k] += v * self.cos[ph as usize];
