@@ -109,6 +109,26 @@ fn split_chips(chips: f64) -> Option<(usize, f32)> {
 /// tracking channels' 0.25, an acquisition's 1023/N) touches at most four.
 const LAG_WINDOW: usize = 4;
 
+/// The window's chip products `1 − 2·(x ⊕ y)` for every pattern of differing chips (bit `l`
+/// set where the two chips at lag `l` differ): four loads instead of four conversions.
+const CHIP_PRODUCTS: [[f32; LAG_WINDOW]; 1 << LAG_WINDOW] = chip_products();
+
+const fn chip_products() -> [[f32; LAG_WINDOW]; 1 << LAG_WINDOW] {
+    let mut out = [[1.0f32; LAG_WINDOW]; 1 << LAG_WINDOW];
+    let mut pattern = 0;
+    while pattern < 1 << LAG_WINDOW {
+        let mut l = 0;
+        while l < LAG_WINDOW {
+            if (pattern >> l) & 1 == 1 {
+                out[pattern][l] = -1.0;
+            }
+            l += 1;
+        }
+        pattern += 1;
+    }
+    out
+}
+
 /// The complex sums `S(m) = Σ_k c_a(s + k) · c_b(s + k + m) · e^{jw(k + ½ − frac s)}` of
 /// [`LAG_WINDOW`] consecutive integer lags `m = n0, n0 + 1, …` at `D` Doppler offsets, from
 /// one pass over the codes. A fractional lag `n + u` is their interpolation,
@@ -140,13 +160,21 @@ impl<const D: usize> LagSums<D> {
             }
         };
         let mut j = first % CA_CODE_LENGTH;
-        let mut jb = [0usize; LAG_WINDOW];
-        for (l, i) in jb.iter_mut().enumerate() {
-            *i = (j + n0 + l) % CA_CODE_LENGTH;
+        // Code `b`'s logic chips at the window's lags, bit `l` = chip `j + n0 + l`, slid one
+        // chip per step; `k` is the chip that enters next. A product of two chips is
+        // `1 − 2·(x ⊕ y)` in logic values.
+        let mut k = (j + n0) % CA_CODE_LENGTH;
+        let mut window = 0u32;
+        for l in 0..LAG_WINDOW {
+            window |= u32::from(b.chip_bit(k)) << l;
+            k = next(k);
         }
         for _ in 0..CA_CODE_LENGTH {
-            let x = f32::from(a.chip(j));
-            let products = jb.map(|i| x * f32::from(b.chip(i)));
+            let differ = window ^ 0u32.wrapping_sub(u32::from(a.chip_bit(j)));
+            let products = CHIP_PRODUCTS
+                .get((differ as usize) & (CHIP_PRODUCTS.len() - 1))
+                .copied()
+                .unwrap_or_default();
             for (d, ph) in phasors.iter_mut().enumerate() {
                 for (lag, &p) in sums.iter_mut().zip(&products) {
                     if let Some(s) = lag.get_mut(d) {
@@ -157,7 +185,8 @@ impl<const D: usize> LagSums<D> {
                 ph.turn();
             }
             j = next(j);
-            jb = jb.map(next);
+            window = (window >> 1) | (u32::from(b.chip_bit(k)) << (LAG_WINDOW - 1));
+            k = next(k);
         }
         Self { n0, sums }
     }
@@ -317,7 +346,6 @@ pub fn near_khz_multiple(a_hz: f32, b_hz: f32, tolerance_hz: f32) -> bool {
 /// The test of the module documentation: is `victim` explained by the cross-correlation of
 /// the stronger ones among `others` (entries with the victim's PRN are skipped; at most
 /// [`MAX_OTHERS`] are considered)? Bounded: see the module documentation.
-#[cfg_attr(feature = "optimize-hot", optimize(speed))]
 pub fn cross_correlation_source(
     victim: &SignalProbe,
     others: &[SignalProbe],
