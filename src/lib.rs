@@ -73,6 +73,7 @@
 #![allow(clippy::manual_is_multiple_of)]
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 #![cfg_attr(docsrs, feature(doc_cfg))]
+#![cfg_attr(feature = "optimize-cold", feature(optimize_attribute))]
 
 #[macro_use]
 mod log;

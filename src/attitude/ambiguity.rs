@@ -268,6 +268,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
 
     /// Steps 1–4 of the method on a float model: float solution, decorrelation, search,
     /// validation. Returns the fixed integers (model order) and the search's figures.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn fix_integers<const N: usize>(
         &self,
         model: &FloatModel<M, N, T>,
@@ -332,6 +333,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
 
     /// Step 3: the bounded depth-first integer search, constrained by the baseline lengths
     /// and angles ([`SearchMode::Constrained`]) or not.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn search<const N: usize>(
         &self,
         model: &FloatModel<M, N, T>,
@@ -541,6 +543,7 @@ impl<const M: usize, T: Real> AmbiguityResolver<M, T> {
     /// The line biases (cycles) at a solved attitude: per baseline the weighted mean of
     /// `φ_ij − z_ij − s_jᵀ C b_i / λ`, and their σ from the phase noise of that mean and the
     /// attitude's covariance along the mean line of sight.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn line_biases_at<const N: usize>(
         &self,
         sats: &[PhaseSatellite<M, T>],

@@ -283,6 +283,7 @@ impl<T: Real> GyroAidedFilter<T> {
 
     /// Covariance of the body-frame attitude error at the filter's last update or
     /// prediction, rad².
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn attitude_covariance(&self) -> Matrix3<T> {
         let s = attitude_rows::<T>();
         s * self.ekf.covariance() * s.transpose()
@@ -291,6 +292,7 @@ impl<T: Real> GyroAidedFilter<T> {
     /// The attitude covariance `τ` seconds after the last update or prediction, for a body
     /// rotation `delta` (`M(t₁)ᵀ M(t₂)`) over that time, without changing the filter (what
     /// a coast on the gyro reports).
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn predicted_attitude_covariance(&self, delta: &Quaternion<T>, tau: T) -> Matrix3<T> {
         let (f, q) = self.transition(delta, tau);
         let s = attitude_rows::<T>();
@@ -318,6 +320,7 @@ impl<T: Real> GyroAidedFilter<T> {
     }
 
     /// The full state covariance (`[δθ, δb, β]`).
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn covariance(&self) -> &SMatrix<T, GYRO_AIDED_STATES, GYRO_AIDED_STATES> {
         self.ekf.covariance()
     }

@@ -155,6 +155,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
     /// or the covariance not positive on its diagonal; [`SnapshotError::InvalidNoise`] when
     /// the smallest σ squares to zero or infinity in `T` (σ below about 4e-23 m in `f32`). Input values
     /// were validated on insertion. Never `Ok` with a non-finite statistic.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn solve<const N: usize>(
         &self,
         obs: &RangeDifferences<M, N, T>,
@@ -261,6 +262,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
 
     /// Steps 2–4: the rotation that best fits reference-frame baseline estimates `a_i` whose
     /// errors have information `Σ_B⁻¹ ⊗ info` (`info = S W Sᵀ`, or any SPD 3×3 metric).
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(crate) fn fit_reference_baselines(
         &self,
         a: &[Vector3<T>; M],
@@ -388,6 +390,7 @@ impl<const M: usize, T: Real> SnapshotSolver<M, T> {
 
     /// `H = Σ W_ik J_iᵀ N J_k`, `g = Σ W_ik J_iᵀ N e_k`, `J(C)`, with `J_i = C [b_i]×`,
     /// `e_i = a_i − C b_i`, `W = Σ_B⁻¹`.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn normal_equations(
         &self,
         c: &Matrix3<T>,

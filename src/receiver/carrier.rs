@@ -65,6 +65,7 @@ pub(crate) struct ColdFix {
 /// the line biases known (`Some`, cycles) they are removed and the single differences
 /// resolved; unknown (`None`), the double differences are, and the biases come back with the
 /// fix.
+#[cfg_attr(feature = "optimize-cold", optimize(size))]
 pub(crate) fn cold_start(
     resolver: &AmbiguityResolver<2, f32>,
     windows: &[Windowed],

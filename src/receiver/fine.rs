@@ -96,6 +96,7 @@ impl FineStage {
     }
 
     /// The loop stage from an attitude at `epoch`.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn start_loop(
         config: &ReceiverConfig,
         q_rb: &Quaternion<f32>,
@@ -124,6 +125,7 @@ impl FineStage {
 
     /// The body-frame covariance at `epoch` (a gyro-aided coast grows it with the gyro's
     /// noise up to that epoch), rad².
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn covariance_at(
         &self,
         epoch: u64,

@@ -96,6 +96,7 @@ impl LoopFine {
     }
 
     /// Body-frame rotation-vector covariance, rad².
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn covariance(&self) -> Matrix3<f32> {
         let angles = self.filter.angles();
         let p = self
@@ -149,6 +150,7 @@ impl LoopFine {
 }
 
 /// A prior at `U = I` from a body-frame rotation-vector covariance.
+#[cfg_attr(feature = "optimize-cold", optimize(size))]
 fn prior_at_identity(
     covariance: &Matrix3<f32>,
     rate_sigma: f32,

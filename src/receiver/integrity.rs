@@ -398,6 +398,7 @@ impl AttitudeReceiver {
 
     /// A gross disagreement that persisted: the alarm (health, event), then the fresh fix's
     /// integers, line biases and attitude replace the fine filter's.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn raise_integrity_alarm(
         &mut self,
         k: u64,

@@ -619,6 +619,7 @@ impl AttitudeReceiver {
     }
 
     /// The best attitude at `epoch`: fine (fresh), coasting, snapshot, or none.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn best_attitude(&self, epoch: u64) -> (Quaternion<f32>, Matrix3<f32>, AttitudeSource) {
         let m = self.gyro_attitude(epoch);
         if let Some(f) = &self.fine {

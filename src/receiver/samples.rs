@@ -178,6 +178,7 @@ impl<const S: usize, const N: usize, C: Correlate<3>> SampleReceiver<S, N, C> {
     ///
     /// # Errors
     /// As [`SampleReceiver::new`]; also for settings the correlator refuses.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn with_settings(
         receiver: ReceiverConfig,
         config: SampleFrontConfig,

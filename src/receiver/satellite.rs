@@ -465,6 +465,7 @@ impl Slot {
 
     /// Closes the window at `centre_epoch` and starts the next one; `None` when it had too
     /// few blocks (half the window's).
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn close_window(&mut self, centre_epoch: u64, config: &ReceiverConfig) -> Option<WindowSd> {
         let w = core::mem::take(&mut self.window);
         let blocks_per_window = config.window_epochs / config.block_epochs.max(1);

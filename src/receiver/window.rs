@@ -41,6 +41,7 @@ const RESTART_VARIANCE: f32 = 1e-6;
 impl AttitudeReceiver {
     /// The window that ends with epoch `k`: every slot's window single differences (the
     /// capture), then the window-level stages, now or deferred ([`super::deferred`]).
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn close_window(&mut self, k: u64) {
         if self.deferred.window.is_some() {
             self.flush_overrun();
@@ -65,6 +66,7 @@ impl AttitudeReceiver {
     // (not inlined: each stage's locals get a frame of their own, so the stack is the
     // largest stage's, not the sum of all)
     #[inline(never)]
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn run_window(&mut self, work: &WindowWork) {
         let (k, centre, windows, m_centre) = (work.k, work.centre, &work.windows, &work.m_centre);
         if !self.fixed {
@@ -121,6 +123,7 @@ impl AttitudeReceiver {
 
     // (not inlined: each stage's locals get a frame of their own)
     #[inline(never)]
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn try_cold_start(
         &mut self,
         k: u64,
@@ -167,6 +170,7 @@ impl AttitudeReceiver {
 
     /// Starts the fine stage from a fix at the window's centre: gyro-aided when the gyro is
     /// usable, else the loop (at the current epoch).
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn start_fine(
         &mut self,
         k: u64,
@@ -227,6 +231,7 @@ impl AttitudeReceiver {
 
     // (not inlined: each stage's locals get a frame of their own)
     #[inline(never)]
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn maintain_ambiguities(
         &mut self,
         k: u64,
@@ -315,6 +320,7 @@ impl AttitudeReceiver {
 
     // (not inlined: each stage's locals get a frame of their own)
     #[inline(never)]
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn run_snapshot(
         &mut self,
         k: u64,
@@ -388,6 +394,7 @@ impl AttitudeReceiver {
 
     // (not inlined: each stage's locals get a frame of their own)
     #[inline(never)]
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn run_rigid_body(&mut self, k: u64, windows: &[Windowed]) {
         let cfg = self.config;
         let fixed = self.fixed_windows(windows);

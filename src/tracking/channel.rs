@@ -229,6 +229,7 @@ impl<const A: usize, C: Correlate<A>> Channel<A, C> {
     /// [`TrackingError::InvalidConfig`] / [`TrackingError::NonFinite`] for bad loop
     /// parameters; the correlator's error ([`TrackingError::Signal`],
     /// [`TrackingError::Bitwise`]) for a front-end configuration it refuses.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn with_settings(
         prn: Prn,
         config: &ChannelConfig,

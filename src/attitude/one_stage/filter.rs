@@ -137,6 +137,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
         self.ekf.set_covariance(p).map_err(OneStageError::from)
     }
 
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     fn initial_state(
         layout: &StateLayout<T, N>,
         prior: &Prior<T>,
@@ -194,6 +195,7 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
     /// observation is unusable (drop that channel and call again);
     /// [`OneStageError::Numerical`] when the step fails numerically. On error the filter is
     /// unchanged.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn step(
         &mut self,
         observations: &[SatelliteObservation<T>],

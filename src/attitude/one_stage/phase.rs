@@ -18,6 +18,7 @@ pub fn paper003_partials<T: Real>(angles: &Paper003Angles<T>) -> [Matrix3<T>; 3]
 
 /// `U(α)` of eq. (2) and its three partial derivatives from one evaluation of the sines and
 /// cosines (the fast single-precision ones of [`super::trig`]).
+#[cfg_attr(feature = "optimize-cold", optimize(size))]
 pub(crate) fn paper003_rotation_and_partials<T: Real>(
     angles: &Paper003Angles<T>,
 ) -> (Matrix3<T>, [Matrix3<T>; 3]) {

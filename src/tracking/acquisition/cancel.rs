@@ -113,6 +113,7 @@ impl Cancelled {
 
     /// The signal's phasor over millisecond `m`: least squares on the samples less `dc`
     /// (phase from sample 0), sample units.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn phasor(
         &self,
         m: usize,
@@ -143,6 +144,7 @@ impl Cancelled {
 
 /// The signal `s` with its code phase and Doppler refined on the first [`REFINE_MS`] ms of
 /// the samples (see the module documentation).
+#[cfg_attr(feature = "optimize-cold", optimize(size))]
 fn refined(
     s: &KnownSignal,
     samples: SearchSamples<'_>,

@@ -592,6 +592,7 @@ fn check_known(known: &[KnownSignal]) -> Result<(), AcquisitionError> {
 /// The threshold `t` on peak/mean for a false-alarm probability `p_fa` over `cells` cells with
 /// `k` independent ms summed: solves `Q(k, k t) = 1 − (1 − p_fa)^{1/cells}` by bisection
 /// (100 steps).
+#[cfg_attr(feature = "optimize-cold", optimize(size))]
 pub fn detection_threshold(k: u16, cells: f64, p_fa: f64) -> f32 {
     let k = f64::from(k.clamp(1, MAX_NONCOHERENT_MS));
     // Per-cell probability, in logs for accuracy: ln p = ln(−expm1(ln(1−P)/M)).

@@ -370,6 +370,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     /// ([`super::tone`]) and the background line power of the spectrum after their
     /// cancellation, for [`Acquisition::excise`] (0 for silent samples, and when no line
     /// of millisecond 0 stands out: nothing to excise). Clears the cancelled signals.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn prepare_interference(
         &mut self,
         samples: SearchSamples<'_>,

@@ -47,6 +47,7 @@ impl Tone {
 
     /// The tone's phasor over millisecond `m` (least squares for a pure tone; phase from
     /// sample 0), sample units.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn phasor(
         &self,
         m: usize,
