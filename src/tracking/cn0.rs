@@ -103,6 +103,7 @@ impl PowerWindow {
     /// correlator that made them: `floor_per_sample` is the noise tap's power per sample that
     /// the samples' rounding alone leaves
     /// ([`Correlate::rounding_noise_per_sample`](crate::signal::Correlate::rounding_noise_per_sample)).
+    #[inline]
     pub fn add_taps_with_floor(&mut self, taps: &Taps, samples: u32, floor_per_sample: f32) {
         let (i, q) = (taps.prompt.i as f32, taps.prompt.q as f32);
         self.sum_i2 += i * i * POWER_SCALE;

@@ -226,13 +226,17 @@ impl<T: Real, const N: usize> OneStageFilter<T, N> {
             &j_aa,
         );
         let (before, after) = (self.angles_of(&x_pred), self.angles_of(&x));
+        let mut angle_step = [T::zero(); 3];
+        for ((step, a), b) in angle_step.iter_mut().zip(after).zip(before) {
+            *step = wrap(a - b);
+        }
         let report = EpochReport {
             satellites: info.satellites,
             status: next.lock.status(),
             alignment: next.lock.alignment(),
             settle_statistic: next.lock.settle_statistic(),
             angle_discriminator: [info.gradient[0], info.gradient[1], info.gradient[2]],
-            angle_step: [0, 1, 2].map(|i| wrap(after[i] - before[i])),
+            angle_step,
             curvature_floored: info.floored,
         };
         *self = next;

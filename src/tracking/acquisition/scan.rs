@@ -711,6 +711,7 @@ const MAX_WINDOW_LAGS: usize = 19;
 
 /// The code of `prn` integrated over bin `b` of the `N` bins of one code period: the mean of
 /// [`CODE_SUBSAMPLES`] chips across the bin, in `−1 … 1`.
+#[inline]
 fn integrated_chip<const N: usize>(prn: Prn, b: usize) -> f32 {
     let mut s = 0i32;
     // (b < N ≤ 8192: the products stay far inside usize, the sum within ±8)
