@@ -657,8 +657,8 @@ impl Default for BitScratch {
 }
 
 /// 32-bit windows of the prompt string: `out[i]` is bits `offset + 32·i …` of `prompt`.
-/// (Inlined: out of line, as a lower inline threshold leaves it, its copy becomes a `memcpy`
-/// call, +13 k instructions per 1 ms of the firmware `realtime`.)
+/// `#[inline]` because a lower inline threshold (firmware `realtime`'s build) would otherwise
+/// leave it out of line, where its copy becomes a `memcpy` call: +13 k instructions per 1 ms.
 #[inline]
 fn window_words(out: &mut [u32], prompt: &[u32; PROMPT_WORDS], offset: usize) {
     let sh = (offset % WORD_SAMPLES) as u32;
