@@ -152,6 +152,14 @@ fn sample_formats_decode_their_documented_layouts() {
         .decode(&[0b1000_0001], 0, &mut i, &mut [])
         .unwrap();
     assert_eq!((n, &i[..8]), (8, &[-1i8, 1, 1, 1, 1, 1, 1, -1][..]));
+    // 1-bit complex: I0 Q0 I1 Q1 I2 Q2 I3 Q3, MSB first, 1 → −1
+    let n = SampleFormat::Sign1Iq
+        .decode(&[0b10_01_00_11], 0, &mut i, &mut q)
+        .unwrap();
+    assert_eq!(
+        (n, &i[..4], &q[..4]),
+        (4, &[-1i8, 1, 1, -1][..], &[1i8, -1, 1, -1][..])
+    );
     // Four channels in a byte: channel c in bits 2c+1..2c
     let byte = 0b11_10_01_00u8;
     for (c, v) in [1i8, 3, -1, -3].iter().enumerate() {
@@ -303,6 +311,7 @@ fn correlator_equals_f64_reference_for_all_formats() {
         (SampleFormat::SignMagnitude2 { complex: false }, 4.1e6),
         (SampleFormat::SignMagnitude2 { complex: true }, 0.0),
         (SampleFormat::Sign1, 4.1e6),
+        (SampleFormat::Sign1Iq, 0.0),
         (SampleFormat::MultiChannel2 { channels: 3 }, 4.1e6),
     ];
     for (fi, &(format, fif)) in formats.iter().enumerate() {

@@ -237,7 +237,7 @@ struct FileArgs {
     /// Sample file; give it once per antenna (antenna order) for single-channel layouts.
     #[arg(long = "file", required = true)]
     files: Vec<PathBuf>,
-    /// Layout: cs8, cs16[:S], int8, sm2, sm2iq, bit1, mc2xN, cs8xN, cs16xN[:S], int8xN (README
+    /// Layout: cs8, cs16[:S], int8, sm2, sm2iq, bit1, bit1iq, mc2xN, cs8xN, cs16xN[:S], int8xN (README
     /// "Recorded sample files" documents the byte layouts).
     #[arg(long)]
     format: String,

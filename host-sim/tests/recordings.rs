@@ -51,6 +51,7 @@ fn every_layout_round_trips_through_acquire_and_track() {
         ("sm2", 4.092e6, 1, 0.55),
         ("sm2iq", 2.6e6, 1, 0.55),
         ("bit1", 4.092e6, 1, 1.96),
+        ("bit1iq", 2.6e6, 1, 1.96),
         ("mc2x3", 4.092e6, 3, 0.55),
         ("cs8x3", 2.6e6, 3, 0.0),
         ("cs16x3:6", 2.6e6, 3, 0.0),

@@ -10,6 +10,7 @@
 //! | [`SampleFormat::Int8`] | real | one signed byte per sample (real IF) |
 //! | [`SampleFormat::SignMagnitude2`] | real or complex | four 2-bit fields per byte, **first sample in the two most significant bits**; in each field the high bit is the sign (1 = negative) and the low bit the magnitude (1 = large): `00 → +1, 01 → +3, 10 → −1, 11 → −3` (MAX2769 / NT1065 two-bit ADC outputs `SIGN`, `MAG`). Complex: fields alternate I, Q |
 //! | [`SampleFormat::Sign1`] | real | eight 1-bit samples per byte, first sample in the most significant bit; `0 → +1, 1 → −1` |
+//! | [`SampleFormat::Sign1Iq`] | complex | four 1-bit I/Q pairs per byte, `I0 Q0 I1 Q1 I2 Q2 I3 Q3` from the most significant bit; `0 → +1, 1 → −1` (the `SIGN` outputs of a 1-bit I/Q front end, captured two bits a clock) |
 //! | [`SampleFormat::MultiChannel2`] | real, up to 4 channels | one byte per sample instant; channel `c` (0–3) in bits `2c+1` (sign) and `2c` (magnitude), same field coding as above (the four-channel 2-bit parallel output of NT1065-class front ends, captured a byte per clock) |
 //!
 //! The field coding of the 2-bit formats is this crate's convention; a board that packs the
@@ -38,6 +39,9 @@ pub enum SampleFormat {
     },
     /// Packed 1-bit sign, eight per byte, most significant bit first.
     Sign1,
+    /// Packed 1-bit complex sign, four I/Q pairs per byte (`I0 Q0 I1 Q1 …`), most
+    /// significant bit first.
+    Sign1Iq,
     /// One byte per sample instant holding 2-bit sign/magnitude fields of up to four channels.
     MultiChannel2 {
         /// Channels present in each byte, 1–4.
@@ -49,7 +53,7 @@ impl SampleFormat {
     /// Whether the format carries complex (I/Q) samples.
     pub const fn is_complex(self) -> bool {
         match self {
-            Self::Cs8 | Self::Cs16 { .. } => true,
+            Self::Cs8 | Self::Cs16 { .. } | Self::Sign1Iq => true,
             Self::SignMagnitude2 { complex } => complex,
             Self::Int8 | Self::Sign1 | Self::MultiChannel2 { .. } => false,
         }
@@ -70,7 +74,7 @@ impl SampleFormat {
         match self {
             Self::Cs8 | Self::Cs16 { .. } | Self::Int8 => 128,
             Self::SignMagnitude2 { .. } | Self::MultiChannel2 { .. } => 3,
-            Self::Sign1 => 1,
+            Self::Sign1 | Self::Sign1Iq => 1,
         }
     }
 
@@ -107,6 +111,13 @@ impl SampleFormat {
                     None
                 }
             }
+            Self::Sign1Iq => {
+                if samples % 4 == 0 {
+                    Some(samples / 4)
+                } else {
+                    None
+                }
+            }
         }
     }
 
@@ -124,6 +135,7 @@ impl SampleFormat {
                 }
             }
             Self::Sign1 => bytes * 8,
+            Self::Sign1Iq => bytes * 4,
         }
     }
 
@@ -198,6 +210,15 @@ impl SampleFormat {
                 for (k, v) in (0..i.len()).zip(i.iter_mut()) {
                     let byte = bytes.get(k >> 3).copied().unwrap_or(0);
                     *v = 1 - 2 * ((byte >> (7 - (k & 7))) & 1) as i8;
+                }
+            }
+            Self::Sign1Iq => {
+                for (k, (vi, vq)) in (0..i.len()).zip(i.iter_mut().zip(q.iter_mut())) {
+                    // Sample k's I bit is bit 2k of the stream, its Q bit 2k + 1.
+                    let byte = bytes.get(k >> 2).copied().unwrap_or(0);
+                    let shift = 6 - 2 * (k & 3);
+                    *vi = 1 - 2 * ((byte >> (shift + 1)) & 1) as i8;
+                    *vq = 1 - 2 * ((byte >> shift) & 1) as i8;
                 }
             }
             Self::MultiChannel2 { .. } => {

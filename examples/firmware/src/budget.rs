@@ -949,8 +949,8 @@ fn bitwise_budgets() {
 
 /// Packing 1 ms (2600 sample instants) of front-end bytes of 3 antennas into bit planes: the
 /// DMA layouts a flight receiver hands over (sm2iq: two complex samples a byte per antenna;
-/// mc2x3: one byte per instant holding the three antennas' 2-bit real samples; bit1: eight
-/// real samples a byte per antenna).
+/// bit1iq: four complex 1-bit samples a byte per antenna; mc2x3: one byte per instant holding
+/// the three antennas' 2-bit real samples; bit1: eight real samples a byte per antenna).
 // (not inlined: each group's locals get a frame of their own, so the stack is the largest
 // group's, not the sum of all)
 #[inline(never)]
@@ -967,6 +967,15 @@ fn packing_budgets() {
     let mut mc2 = [0u8; 2600];
     for (k, b) in mc2.iter_mut().enumerate() {
         *b = field(s[0][k]) | (field(s[1][k]) << 2) | (field(s[2][k]) << 4);
+    }
+    let mut bit1iq = [[0u8; 650]; 3];
+    for (a, bytes) in bit1iq.iter_mut().enumerate() {
+        for (k, b) in bytes.iter_mut().enumerate() {
+            for j in 0..4 {
+                let (i, q) = (s[a][4 * k + j], s[a + 3][4 * k + j]);
+                *b |= (u8::from(i < 0) << (7 - 2 * j)) | (u8::from(q < 0) << (6 - 2 * j));
+            }
+        }
     }
     let mut bit1 = [[0u8; 325]; 3];
     for (a, bytes) in bit1.iter_mut().enumerate() {
@@ -996,6 +1005,14 @@ fn packing_budgets() {
         }
         n
     });
+    let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(one_cx), PlaneBuffer::new(one_cx), PlaneBuffer::new(one_cx)];
+    let n1q = measure("packing 1 ms bit1iq -> 1-bit complex planes, 3 antennas (3 x 2600 samples)", || {
+        let mut n = 0;
+        for (b, bytes) in black_box(&mut bufs).iter_mut().zip(black_box(&bit1iq)) {
+            n += b.pack_bytes(SampleFormat::Sign1Iq, bytes, 0).unwrap_or(0);
+        }
+        n
+    });
     let mut bufs = [PlaneBuffer::<BIT_SELF_TEST_WORDS>::new(two_re), PlaneBuffer::new(two_re), PlaneBuffer::new(two_re)];
     let n2 = measure("packing 1 ms mc2x3 -> 2-bit real planes, 3 antennas (3 x 2600 samples)", || {
         let mut n = 0;
@@ -1012,7 +1029,7 @@ fn packing_budgets() {
         }
         n
     });
-    hprintln!("budget packing: samples packed {} {} {} {}", n, n1, n2, n3);
+    hprintln!("budget packing: samples packed {} {} {} {} {}", n, n1, n1q, n2, n3);
 }
 
 /// Navigation (`nav`, f64 soft-float on the M4F for times, ranges and orbits): one subframe

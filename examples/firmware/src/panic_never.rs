@@ -442,6 +442,7 @@ fn bitwise(cfg: &CorrelatorConfig, prn: Prn) {
         let _ = black_box(b.pack_bytes(black_box(SampleFormat::SignMagnitude2 { complex: true }), &raw, black_box(0)));
         let _ = black_box(b.pack_bytes(black_box(SampleFormat::MultiChannel2 { channels: 3 }), &raw, black_box(1)));
         let _ = black_box(b.pack_bytes(black_box(SampleFormat::Sign1), &raw, black_box(0)));
+        let _ = black_box(b.pack_bytes(black_box(SampleFormat::Sign1Iq), &raw, black_box(0)));
         let _ = black_box(b.pack_bytes(black_box(SampleFormat::SignMagnitude2 { complex: false }), &raw, black_box(0)));
         let _ = black_box(b.pack_bytes(black_box(SampleFormat::Cs8), &raw, black_box(0)));
         let _ = black_box(b.pack_bytes(black_box(SampleFormat::Int8), &raw, black_box(0)));

@@ -6,7 +6,7 @@
 //!
 //! 1. the samples of 3 antennas × 8 satellites (2.6 Msps complex, 45 dB-Hz, the example
 //!    flight's attitude, lines of sight and line biases as the embedded truth) are synthesized
-//!    in 1 ms blocks as the front end's `sm2iq` bytes ([`synth`], [`frontend`]), outside the
+//!    in 1 ms blocks as the front end's `bit1iq` or `sm2iq` bytes ([`synth`], [`frontend`]), outside the
 //!    counted region;
 //! 2. acquisition before the counted region: every PRN searched (`SampleReceiver::search`, ±2.5
 //!    kHz, 6 ms non-coherent + the 6 ms dwell) on the reference antenna's first 12 ms; the
@@ -52,7 +52,7 @@ use frontend::FrontEnd;
 #[entry]
 fn main() -> ! {
     hprintln!(
-        "realtime: SampleReceiver<{}, 1024, BitCorrelator<3>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from sm2iq bytes, {} ms blocks, {} ms counted per front end",
+        "realtime: SampleReceiver<{}, 1024, BitCorrelator<3>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from bit1iq / sm2iq bytes, {} ms blocks, {} ms counted per front end",
         run::CHANNELS,
         core::mem::size_of::<run::Front>(),
         run::CARRIER,

@@ -38,7 +38,7 @@ pub struct FileFormat {
 
 /// The format names `--format` accepts, for messages.
 pub const FORMAT_NAMES: &str =
-    "cs8, cs16[:S], int8, sm2, sm2iq, bit1, mc2xN, cs8xN, cs16xN[:S], int8xN (N = 1-4, S = 0-8)";
+    "cs8, cs16[:S], int8, sm2, sm2iq, bit1, bit1iq, mc2xN, cs8xN, cs16xN[:S], int8xN (N = 1-4, S = 0-8)";
 
 impl FileFormat {
     /// Parses a `--format` name (see the module documentation).
@@ -84,6 +84,7 @@ impl FileFormat {
             "sm2" => SampleFormat::SignMagnitude2 { complex: false },
             "sm2iq" => SampleFormat::SignMagnitude2 { complex: true },
             "bit1" => SampleFormat::Sign1,
+            "bit1iq" => SampleFormat::Sign1Iq,
             "mc2" => {
                 let n = channels.with_context(|| {
                     format!("format {name:?}: mc2 needs its channel count, e.g. mc2x3")
@@ -94,7 +95,7 @@ impl FileFormat {
         };
         let packed = matches!(
             sample,
-            SampleFormat::SignMagnitude2 { .. } | SampleFormat::Sign1
+            SampleFormat::SignMagnitude2 { .. } | SampleFormat::Sign1 | SampleFormat::Sign1Iq
         );
         if packed && channels.is_some() {
             bail!("format {name:?}: packed formats hold one channel (use mc2xN for several)");
@@ -115,6 +116,7 @@ impl FileFormat {
             SampleFormat::SignMagnitude2 { complex: false } => "sm2",
             SampleFormat::SignMagnitude2 { complex: true } => "sm2iq",
             SampleFormat::Sign1 => "bit1",
+            SampleFormat::Sign1Iq => "bit1iq",
             SampleFormat::MultiChannel2 { .. } => "mc2",
         };
         let mut s = base.to_string();
@@ -163,6 +165,7 @@ impl FileFormat {
             SampleFormat::SignMagnitude2 { complex: false } => (4, 1),
             SampleFormat::SignMagnitude2 { complex: true } => (2, 1),
             SampleFormat::Sign1 => (8, 1),
+            SampleFormat::Sign1Iq => (4, 1),
         }
     }
 
@@ -230,8 +233,8 @@ mod tests {
     #[test]
     fn names_parse_and_print_back() {
         for name in [
-            "cs8", "cs16", "cs16:6", "int8", "sm2", "sm2iq", "bit1", "mc2x3", "mc2x4", "cs8x3",
-            "cs16x2:5", "int8x3",
+            "cs8", "cs16", "cs16:6", "int8", "sm2", "sm2iq", "bit1", "bit1iq", "mc2x3", "mc2x4",
+            "cs8x3", "cs16x2:5", "int8x3",
         ] {
             let f = FileFormat::parse(name).unwrap();
             assert_eq!(f.name(), name);
@@ -258,6 +261,10 @@ mod tests {
         assert_eq!(
             FileFormat::parse("bit1").unwrap().instants_in(3).unwrap(),
             24
+        );
+        assert_eq!(
+            FileFormat::parse("bit1iq").unwrap().instants_in(3).unwrap(),
+            12
         );
         assert_eq!(
             FileFormat::parse("mc2x3").unwrap().instants_in(7).unwrap(),

@@ -16,7 +16,7 @@ pub fn extension(format: SampleFormat) -> &'static str {
         SampleFormat::Cs16 { .. } => "cs16",
         SampleFormat::Int8 => "int8",
         SampleFormat::SignMagnitude2 { .. } => "sm2",
-        SampleFormat::Sign1 => "bit1",
+        SampleFormat::Sign1 | SampleFormat::Sign1Iq => "bit1",
         SampleFormat::MultiChannel2 { .. } => "mc2",
     }
 }

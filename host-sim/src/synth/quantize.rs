@@ -257,6 +257,13 @@ pub fn encode(format: SampleFormat, antennas: &[AnalogSamples]) -> Result<Vec<Ve
                         out[k / 8] |= u8::from(a.i[k] < 0.0) << (7 - k % 8);
                     }
                 }
+                SampleFormat::Sign1Iq => {
+                    for k in 0..n {
+                        let shift = 6 - 2 * (k % 4);
+                        out[k / 4] |= (u8::from(a.i[k] < 0.0) << (shift + 1))
+                            | (u8::from(a.q[k] < 0.0) << shift);
+                    }
+                }
                 SampleFormat::MultiChannel2 { .. } => unreachable!("handled above"),
             }
             Ok(out)

@@ -18,7 +18,8 @@
 //!
 //! # Packing
 //! [`PlaneBuffer::pack_bytes`] reads the front-end byte layouts of [`SampleFormat`] directly
-//! (no `i8` copy): `Sign1` by a bit reversal per byte, `SignMagnitude2` (real and complex) by
+//! (no `i8` copy): `Sign1` by a bit reversal per byte, `Sign1Iq` by the same reversal and a
+//! bit unshuffle (I bits even, Q bits odd), `SignMagnitude2` (real and complex) by
 //! 256-entry lookup tables that sort each byte's fields into the planes, `MultiChannel2` by
 //! multiply-gathers of one channel's bit pair from four bytes at a time, `Cs8`/`Int8` (1-bit
 //! only) by the sign bit of each byte. [`PlaneBuffer::pack_i8`] packs decoded `i8` samples
@@ -315,7 +316,7 @@ impl<const W: usize> PlaneBuffer<W> {
     /// [`SampleFormat`]) and returns the number of samples packed: all whole samples of
     /// `bytes`, at most [`capacity`](Self::capacity). Replaces the previous contents.
     ///
-    /// 1-bit planes take the sign of any of `Sign1`, `SignMagnitude2`, `MultiChannel2`, `Cs8`
+    /// 1-bit planes take the sign of any of `Sign1`, `Sign1Iq`, `SignMagnitude2`, `MultiChannel2`, `Cs8`
     /// and `Int8`; 2-bit planes need a format with magnitude bits (`SignMagnitude2`,
     /// `MultiChannel2`; 8-bit samples go through [`pack_i8`](Self::pack_i8) with a threshold).
     ///
@@ -341,6 +342,7 @@ impl<const W: usize> PlaneBuffer<W> {
         let n = format.samples_in(bytes.len()).min(self.capacity());
         match format {
             SampleFormat::Sign1 if !two => self.pack_sign1(bytes, n),
+            SampleFormat::Sign1Iq if !two => self.pack_sign1iq(bytes, n),
             SampleFormat::SignMagnitude2 { complex: false } => self.pack_sm2(bytes, n),
             SampleFormat::SignMagnitude2 { complex: true } => self.pack_sm2iq(bytes, n),
             SampleFormat::MultiChannel2 { .. } => self.pack_mc2(bytes, channel, n),
@@ -497,8 +499,22 @@ impl<const W: usize> PlaneBuffer<W> {
     /// `Sign1`: eight samples a byte, first sample in the most significant bit: the bits of
     /// each byte reversed.
     fn pack_sign1(&mut self, bytes: &[u8], n: usize) {
-        self.pack_words::<4>(bytes, n, |b| {
-            [u32::from_le_bytes(*b).reverse_bits().swap_bytes(), 0, 0, 0]
+        self.pack_words::<4>(bytes, n, |b| [fields_lsb_first(*b), 0, 0, 0]);
+    }
+
+    /// `Sign1Iq`: four I/Q pairs a byte, first pair in the two most significant bits: each
+    /// byte's bits reversed (pair k in bits 2k, 2k + 1 of a little-endian word), then the
+    /// even (I) and odd (Q) bits of each 16 pairs separated by an unshuffle (fewer
+    /// instructions than sorting by the real `SignMagnitude2` table, whose fields the pairs
+    /// resemble: 14.9 k against 20.1 k per 1 ms of 3 antennas on the M4F).
+    fn pack_sign1iq(&mut self, bytes: &[u8], n: usize) {
+        self.pack_words::<8>(bytes, n, |b| {
+            let [b0, b1, b2, b3, b4, b5, b6, b7] = *b;
+            let first = unshuffle(fields_lsb_first([b0, b1, b2, b3]));
+            let second = unshuffle(fields_lsb_first([b4, b5, b6, b7]));
+            let si = (first & 0xffff) | (second << 16);
+            let sq = (first >> 16) | (second & 0xffff_0000);
+            [si, 0, sq, 0]
         });
     }
 
@@ -595,6 +611,28 @@ impl<const W: usize> PlaneBuffer<W> {
             });
         }
     }
+}
+
+/// Four bytes whose first bit is the most significant as one word whose first bit is bit 0.
+#[inline(always)]
+fn fields_lsb_first(b: [u8; 4]) -> u32 {
+    u32::from_le_bytes(b).reverse_bits().swap_bytes()
+}
+
+/// The even bits of `x` gathered into its low half and the odd bits into its high half, each
+/// in order (an outer perfect unshuffle: four swap-by-mask steps).
+#[inline(always)]
+fn unshuffle(mut x: u32) -> u32 {
+    for (shift, mask) in [
+        (1, 0x2222_2222u32),
+        (2, 0x0c0c_0c0c),
+        (4, 0x00f0_00f0),
+        (8, 0x0000_ff00),
+    ] {
+        let t = (x ^ (x >> shift)) & mask;
+        x ^= t ^ (t << shift);
+    }
+    x
 }
 
 /// `SignMagnitude2` real: byte → sign bits of its four samples (bits 0–3, first sample in bit
@@ -756,6 +794,7 @@ mod tests {
     fn packers_equal_decode_then_pack() {
         let cases = [
             (SampleFormat::Sign1, Resolution::OneBit),
+            (SampleFormat::Sign1Iq, Resolution::OneBit),
             (
                 SampleFormat::SignMagnitude2 { complex: false },
                 Resolution::TwoBit,
@@ -885,6 +924,15 @@ mod tests {
         assert_eq!(
             b.pack_bytes(SampleFormat::SignMagnitude2 { complex: true }, &[0; 8], 0),
             Err(PlaneError::UnsupportedFormat)
+        );
+        let two_complex = PlaneFormat {
+            resolution: Resolution::TwoBit,
+            complex: true,
+        };
+        assert_eq!(
+            PlaneBuffer::<4>::new(two_complex).pack_bytes(SampleFormat::Sign1Iq, &[0; 8], 0),
+            Err(PlaneError::UnsupportedFormat),
+            "a sign-only format cannot fill 2-bit planes"
         );
         assert_eq!(
             b.pack_bytes(SampleFormat::MultiChannel2 { channels: 2 }, &[0; 8], 2),

@@ -14,7 +14,7 @@ use gnss_attitude::signal::{BitSettings, Prn, SlaveTaps, CA_CHIP_RATE_HZ};
 use gnss_attitude::tracking::SearchSamples;
 
 use super::fixed::fixed;
-use super::frontend::{FrontEnd, SM2IQ};
+use super::frontend::FrontEnd;
 use super::memory;
 use super::synth::{predicted_doppler_hz, Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
 
@@ -37,7 +37,8 @@ pub const ACQUISITION_MS: u16 = 6;
 pub const ACQUISITION_SAMPLES: usize = 2 * ACQUISITION_MS as usize * SAMPLES_PER_MS + 1;
 /// Plane words that hold them.
 pub const ACQUISITION_WORDS: usize = ACQUISITION_SAMPLES.div_ceil(32);
-/// The front end's bytes of one antenna and block (`sm2iq`: two complex samples per byte).
+/// The room for a front end's bytes of one antenna and block: the larger layout's (`sm2iq`:
+/// two complex samples per byte; `bit1iq` fills the first half, [`FrontEnd::block_bytes`]).
 pub const BLOCK_BYTES: usize = BLOCK / 2;
 /// Plane words per antenna and block (32 samples per word).
 pub const WORDS: usize = BLOCK.div_ceil(32);
@@ -102,12 +103,13 @@ pub enum BlockError {
     Receiver(ReceiverError),
 }
 
-/// The antennas' bit planes of one block, packed from the front end's bytes (`sm2iq`) with
-/// the core's packing, as firmware would from the DMA buffer (counted: the receiver's work).
+/// The antennas' bit planes of one block, packed from the front end's bytes
+/// ([`FrontEnd::sample_format`]) with the core's packing, as firmware would from the DMA
+/// buffer (counted: the receiver's work).
 #[inline(always)]
-fn pack_block(planes: &mut [PlaneBuffer<WORDS>; 3], bytes: [&[u8]; 3]) -> Result<(), BlockError> {
+fn pack_block(front_end: FrontEnd, planes: &mut [PlaneBuffer<WORDS>; 3], bytes: [&[u8]; 3]) -> Result<(), BlockError> {
     for (p, b) in planes.iter_mut().zip(bytes) {
-        if p.pack_bytes(SM2IQ, b, 0).map_err(BlockError::Plane)? != BLOCK {
+        if p.pack_bytes(front_end.sample_format(), b, 0).map_err(BlockError::Plane)? != BLOCK {
             return Err(BlockError::Plane(PlaneError::PlaneLength));
         }
     }
@@ -158,8 +160,9 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
     let first = synth.next_sample();
     while collected.len() < ACQUISITION_SAMPLES {
         let [b0, b1, b2] = bytes;
-        synth.fill_bytes(front_end, [&mut b0[..], &mut b1[..], &mut b2[..]]);
-        let appended = pack_block(planes, [&b0[..], &b1[..], &b2[..]]).map_err(|e| hprintln!("realtime {}: acquisition block refused: {:?}", front_end.name(), e)).and_then(|()| collected.append(&planes[0].planes()).map_err(|e| hprintln!("realtime {}: acquisition planes refused: {:?}", front_end.name(), e)));
+        let n = front_end.block_bytes();
+        synth.fill_bytes(front_end, [&mut b0[..n], &mut b1[..n], &mut b2[..n]]);
+        let appended = pack_block(front_end, planes, [&b0[..n], &b1[..n], &b2[..n]]).map_err(|e| hprintln!("realtime {}: acquisition block refused: {:?}", front_end.name(), e)).and_then(|()| collected.append(&planes[0].planes()).map_err(|e| hprintln!("realtime {}: acquisition planes refused: {:?}", front_end.name(), e)));
         if appended.is_err() {
             return 0;
         }
@@ -283,15 +286,17 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         synth.set_geometry(e0);
         {
             let [b0, b1, b2] = &mut bytes;
-            synth.fill_bytes(front_end, [&mut b0[..], &mut b1[..], &mut b2[..]]);
+            let n = front_end.block_bytes();
+            synth.fill_bytes(front_end, [&mut b0[..n], &mut b1[..n], &mut b2[..n]]);
         }
         let counting = out.fine_at.is_some_and(|f| e0 >= f + SETTLE_MS);
         let flight = synth.flight();
-        let input = [&bytes[0][..], &bytes[1][..], &bytes[2][..]];
+        let n = front_end.block_bytes();
+        let input = [&bytes[0][..n], &bytes[1][..n], &bytes[2][..n]];
         // the receiver's work of one block, in three stages: the front end's bytes packed
         // into planes; the gyro increments that end in the block and its samples (the 1 ms
         // path); the stages deferred out of it
-        let pack = |planes: &mut [PlaneBuffer<WORDS>; 3]| pack_block(planes, black_box(input));
+        let pack = |planes: &mut [PlaneBuffer<WORDS>; 3]| pack_block(front_end, planes, black_box(input));
         let work = |rx: &mut Front, gyro_next: &mut u64, planes: &[PlaneBuffer<WORDS>; 3]| {
             let mut refused = 0u32;
             while 10 * (*gyro_next + 1) < e0 + BLOCK_MS as u64 {

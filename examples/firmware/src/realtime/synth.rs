@@ -212,16 +212,17 @@ impl Synth {
         (sum as f32 - 510.0) * (1.0 / 147.800_54)
     }
 
-    /// The stream's next `2 · out[0].len()` complex samples of the three antennas as the
-    /// front end delivers them: `sm2iq` bytes ([`super::frontend::SM2IQ`], two samples per
-    /// byte, first sample in the most significant bits), one stream per antenna.
+    /// The stream's next complex samples of the three antennas as the front end delivers
+    /// them, `out[0].len()` bytes of each ([`FrontEnd::sample_format`]: `bit1iq` or `sm2iq`,
+    /// first sample in the most significant bits), one stream per antenna.
     pub fn fill_bytes(&mut self, front_end: FrontEnd, out: [&mut [u8]; 3]) {
-        let len = 2 * out[0].len();
+        let per_byte = front_end.samples_per_byte();
+        let len = per_byte * out[0].len();
         let mut out = out;
         self.generate(3, len, |p, start, re, im| {
-            let bytes = &mut out[p][start / 2..(start + re.len()) / 2];
-            for (b, (i, q)) in bytes.iter_mut().zip(re.chunks_exact(2).zip(im.chunks_exact(2))) {
-                *b = front_end.field(i[0]) << 6 | front_end.field(q[0]) << 4 | front_end.field(i[1]) << 2 | front_end.field(q[1]);
+            let bytes = &mut out[p][start / per_byte..(start + re.len()) / per_byte];
+            for (b, (i, q)) in bytes.iter_mut().zip(re.chunks_exact(per_byte).zip(im.chunks_exact(per_byte))) {
+                *b = front_end.byte(i, q);
             }
         });
     }
