@@ -60,10 +60,7 @@ impl FrontEnd {
 
     /// Complex samples per byte of [`sample_format`](Self::sample_format): 4 or 2.
     pub const fn samples_per_byte(self) -> usize {
-        match self {
-            FrontEnd::OneBit => 4,
-            FrontEnd::TwoBit => 2,
-        }
+        self.sample_format().samples_in(1)
     }
 
     /// Bytes of one block ([`BLOCK`] samples) of one antenna.

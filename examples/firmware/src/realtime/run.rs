@@ -243,6 +243,7 @@ pub fn run(front_end: FrontEnd) -> Outcome {
 #[inline(never)]
 fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
     let mut bytes = [[0u8; BLOCK_BYTES]; 3];
+    let block_bytes = front_end.block_bytes();
     let mut planes = [(); 3].map(|_| PlaneBuffer::<WORDS>::new(front_end.plane_format()));
     let mut out = Outcome {
         fine_at: None,
@@ -286,13 +287,11 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         synth.set_geometry(e0);
         {
             let [b0, b1, b2] = &mut bytes;
-            let n = front_end.block_bytes();
-            synth.fill_bytes(front_end, [&mut b0[..n], &mut b1[..n], &mut b2[..n]]);
+            synth.fill_bytes(front_end, [&mut b0[..block_bytes], &mut b1[..block_bytes], &mut b2[..block_bytes]]);
         }
         let counting = out.fine_at.is_some_and(|f| e0 >= f + SETTLE_MS);
         let flight = synth.flight();
-        let n = front_end.block_bytes();
-        let input = [&bytes[0][..n], &bytes[1][..n], &bytes[2][..n]];
+        let input = [&bytes[0][..block_bytes], &bytes[1][..block_bytes], &bytes[2][..block_bytes]];
         // the receiver's work of one block, in three stages: the front end's bytes packed
         // into planes; the gyro increments that end in the block and its samples (the 1 ms
         // path); the stages deferred out of it
