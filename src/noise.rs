@@ -36,7 +36,7 @@ impl StandardNormal {
         }
         let u1 = uniform_open01(rng);
         let u2 = uniform_open01(rng);
-        let radius = libm::sqrtf(-2.0 * libm::logf(u1));
+        let radius = crate::sqrtf(-2.0 * libm::logf(u1));
         let (s, c) = libm::sincosf(core::f32::consts::TAU * u2);
         self.spare = Some(radius * s);
         radius * c

@@ -132,7 +132,7 @@ impl AttitudeRecord {
         Ok(Self {
             epoch: attitude.epoch,
             q_rb: [q.w, q.x, q.y, q.z],
-            sigma_rad: [d.x, d.y, d.z].map(|v| libm::sqrtf(v.max(0.0))),
+            sigma_rad: [d.x, d.y, d.z].map(|v| crate::sqrtf(v.max(0.0))),
             source: source_code(attitude.source),
             satellites_tracked: h.satellites_tracked,
             satellites_used: h.satellites_used,

@@ -63,7 +63,7 @@ pub fn klobuchar_delay_m(
 pub fn troposphere_delay_m(height_m: f32, el_rad: f32) -> f32 {
     let zenith = ZENITH_TROPOSPHERE_M * libm::expf(-height_m.max(0.0) / TROPOSPHERE_SCALE_HEIGHT_M);
     let s = libm::sinf(el_rad);
-    zenith * 1.001 / libm::sqrtf(0.002_001 + s * s)
+    zenith * 1.001 / crate::sqrtf(0.002_001 + s * s)
 }
 
 #[cfg(test)]

@@ -145,7 +145,7 @@ impl BitSynchronizer {
         }
         let (b, s) = (f32::from(best), f32::from(second));
         let confident = best >= self.config.min_edge_transitions
-            && b - s >= self.config.z_score * libm::sqrtf(b + s);
+            && b - s >= self.config.z_score * crate::sqrtf(b + s);
         confident.then_some(at as u8)
     }
 

@@ -159,8 +159,8 @@ impl OrbitFilter {
             time: self.time,
             position_m: self.r,
             velocity_m_s: self.v,
-            position_sigma_m: libm::sqrtf(pos_var.max(0.0)),
-            velocity_sigma_m_s: libm::sqrtf(vel_var.max(0.0)),
+            position_sigma_m: crate::sqrtf(pos_var.max(0.0)),
+            velocity_sigma_m_s: crate::sqrtf(vel_var.max(0.0)),
         }
     }
 

@@ -621,7 +621,7 @@ fn finish(
         .map(|s| s.weight)
         .sum::<f32>()
         / n;
-    let residual_rms_m = libm::sqrtf(ls.chi_square / n / weight_mean.max(f32::MIN_POSITIVE));
+    let residual_rms_m = crate::sqrtf(ls.chi_square / n / weight_mean.max(f32::MIN_POSITIVE));
     Ok(Fix {
         time: receive.add_seconds(-ls.x[3] / SPEED_OF_LIGHT)?,
         position_m: [ls.x[0], ls.x[1], ls.x[2]],
@@ -661,7 +661,7 @@ fn dop(sats: &[Prepared], x: &[f64; 4], at: &Option<Geodetic>, atm: &Atmosphere)
         }
         None => (qp[(0, 0)] + qp[(1, 1)], qp[(2, 2)]),
     };
-    let root = |v: f32| libm::sqrtf(v.max(0.0));
+    let root = |v: f32| crate::sqrtf(v.max(0.0));
     Dop {
         gdop: root(q.trace()),
         pdop: root(qp.trace()),

@@ -134,7 +134,7 @@ pub fn observation_from_epoch(
             return Err(OneStageError::InvalidConfig);
         };
         // z_P = Z_P / σ_P: equal noise on every antenna (module docs, "Scale")
-        let inv_sigma = 1.0 / libm::sqrtf(var);
+        let inv_sigma = 1.0 / crate::sqrtf(var);
         if let (Some(i), Some(q)) = (prompt.i.get_mut(p), prompt.q.get_mut(p)) {
             *i = taps.prompt.i as f32 * inv_sigma;
             *q = q_sign * taps.prompt.q as f32 * inv_sigma;

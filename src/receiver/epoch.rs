@@ -233,7 +233,7 @@ impl AttitudeReceiver {
         let mut normalized = Observations::new();
         let mut powers = [0.0f32; 3];
         for o in observations {
-            let z = o.prompt.normalized(libm::sqrtf(o.noise_var));
+            let z = o.prompt.normalized(crate::sqrtf(o.noise_var));
             for (p, zp) in powers.iter_mut().zip(z.iter()) {
                 *p += zp.norm_sqr() - 2.0;
             }

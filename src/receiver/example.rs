@@ -41,7 +41,7 @@ pub const BODY_RATE: [f32; 3] = [0.004, -0.003, 0.0105];
 
 /// The antennas: a 0.5 m equilateral triangle at `z = −0.05 m`, body axes, m.
 pub fn antennas() -> [[f32; 3]; 3] {
-    let r = 0.5 / libm::sqrtf(3.0);
+    let r = 0.5 / crate::sqrtf(3.0);
     let at = |deg: f32| {
         let a = deg.to_radians();
         [r * libm::cosf(a), r * libm::sinf(a), -0.05]
@@ -137,7 +137,7 @@ impl ExampleFlight {
         let c_rb = self.attitude(epoch).to_dcm();
         let k = core::f32::consts::TAU / GPS_L1_WAVELENGTH_M as f32;
         let cn0 = libm::powf(10.0, 0.1 * CN0_DBHZ);
-        let amplitude = libm::sqrtf(2.0 * cn0 * EPOCH_S) * NOISE_SIGMA;
+        let amplitude = crate::sqrtf(2.0 * cn0 * EPOCH_S) * NOISE_SIGMA;
         let positions = antennas().map(Vector3::from);
         let mut out = heapless::Vec::new();
         for (i, (prn, _, _)) in SKY.iter().enumerate() {

@@ -181,8 +181,8 @@ impl FineStage {
                 LineBias {
                     rad: [b.x, b.y],
                     sigma_rad: [
-                        libm::sqrtf(p[(0, 0)].max(0.0)),
-                        libm::sqrtf(p[(1, 1)].max(0.0)),
+                        crate::sqrtf(p[(0, 0)].max(0.0)),
+                        crate::sqrtf(p[(1, 1)].max(0.0)),
                     ],
                     known: true,
                 }
@@ -246,7 +246,7 @@ impl GyroFine {
         let p = self
             .filter
             .predicted_attitude_covariance(&(self.m.conjugate() * *m), tau);
-        libm::sqrtf(p[(0, 0)].max(p[(1, 1)]).max(p[(2, 2)]).max(0.0))
+        crate::sqrtf(p[(0, 0)].max(p[(1, 1)]).max(p[(2, 2)]).max(0.0))
     }
 
     /// Standard deviation of the gyro bias error, rad/s.

@@ -119,7 +119,7 @@ impl LoopFine {
         let sigma = |k: usize| {
             layout.parameter[3 + k]
                 .and_then(|i| p.get((i, i)).copied())
-                .map_or(0.0, libm::sqrtf)
+                .map_or(0.0, crate::sqrtf)
         };
         LineBias {
             rad: b,

@@ -365,7 +365,7 @@ impl AttitudeReceiver {
         let d = (q_fine.conjugate() * fix.q_rb).to_rotation_vector();
         let s = p_fine + fix.covariance;
         let nees = s.cholesky().map_or(f32::INFINITY, |c| d.dot(&c.solve(&d)));
-        let largest = |p: &Matrix3<f32>| libm::sqrtf(p.diagonal().max().max(0.0));
+        let largest = |p: &Matrix3<f32>| crate::sqrtf(p.diagonal().max().max(0.0));
         self.integrity.last_check = Some(IntegrityCheck {
             epoch: centre,
             angle_rad: d.norm(),

@@ -351,7 +351,7 @@ impl Slot {
         for (k, zp) in (0..2).zip([zb, zc]) {
             let product = zp * za.conj();
             b.product[k] += product;
-            b.magnitude[k] += libm::sqrtf(product.norm_sqr());
+            b.magnitude[k] += crate::sqrtf(product.norm_sqr());
         }
         for (p, zp) in b.power.iter_mut().zip(z.iter()) {
             *p += zp.norm_sqr();
@@ -387,7 +387,7 @@ impl Slot {
         let [qa, qb, qc] = self.snr;
         let coherent = |k: usize| {
             b.magnitude[k] > 0.0
-                && libm::sqrtf(b.product[k].norm_sqr()) >= MIN_COHERENCE * b.magnitude[k]
+                && crate::sqrtf(b.product[k].norm_sqr()) >= MIN_COHERENCE * b.magnitude[k]
         };
         let strong = |q: f32, k: usize| q >= MIN_BLOCK_SNR && !blocked[k];
         let usable = [
@@ -497,7 +497,7 @@ impl Slot {
             let mean_c = w.origin[k] + w.s_c[k] / n + slope_per_epoch * (centre_tau - mean_tau);
             let fraction = arg_cycles(w.product[k]);
             let coherent = w.magnitude[k] > 0.0
-                && libm::sqrtf(w.product[k].norm_sqr()) >= MIN_COHERENCE * w.magnitude[k];
+                && crate::sqrtf(w.product[k].norm_sqr()) >= MIN_COHERENCE * w.magnitude[k];
             let valid = w.counter_ok[k] && coherent && straight && self.counter_valid[k];
             let rate = slope_per_epoch / t;
             out.phase[k] = fraction + libm::roundf(mean_c - fraction);
@@ -513,7 +513,7 @@ impl Slot {
         }
         // σ (cycles) = 1/(2π √information)
         if w.information > 0.0 {
-            out.sigma_cycles = 0.5 * core::f32::consts::FRAC_1_PI / libm::sqrtf(w.information);
+            out.sigma_cycles = 0.5 * core::f32::consts::FRAC_1_PI / crate::sqrtf(w.information);
         }
         Some(out)
     }
@@ -567,7 +567,7 @@ mod tests {
             los: [0.0, 0.0, 1.0],
             los_rate: [0.0; 3],
         };
-        let a = libm::sqrtf(2.0 * 10.0);
+        let a = crate::sqrtf(2.0 * 10.0);
         let (mut sum, mut sum2, mut predicted) = (Vector2::zeros(), Vector2::zeros(), 0.0);
         let mut cross = 0.0;
         let runs = 400;

@@ -220,7 +220,7 @@ impl AttitudeReceiver {
         if source == AttitudeSource::None {
             return None;
         }
-        let sigma = libm::sqrtf(cov.trace().max(0.0));
+        let sigma = crate::sqrtf(cov.trace().max(0.0));
         let [b, c] = self.geometry.baselines;
         let longest = b.norm().max(c.norm());
         Some((

@@ -86,7 +86,7 @@ impl Iq {
 
     /// `|I + jQ|` as f32.
     pub fn magnitude(&self) -> f32 {
-        libm::sqrtf(self.power())
+        crate::sqrtf(self.power())
     }
 }
 

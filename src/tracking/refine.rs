@@ -110,7 +110,7 @@ fn search(squares: &[[f32; 2]], t: f32, centre: f32, range: f32) -> f32 {
             ri = rr * ws + ri * wc;
             rr = r;
         }
-        let m = libm::sqrtf(sr * sr + si * si);
+        let m = crate::sqrtf(sr * sr + si * si);
         if m > best.0 {
             best = (m, c);
             around = [previous[1], m, 0.0];

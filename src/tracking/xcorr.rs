@@ -370,7 +370,7 @@ pub fn cross_correlation_source(
     for (k, a) in (0..used.len()).zip(used) {
         for b in used.iter().skip(k + 1) {
             if near_khz_multiple(a.1, b.1, test.coherence_hz) {
-                predicted += 2.0 * libm::sqrtf(a.0 * b.0);
+                predicted += 2.0 * crate::sqrtf(a.0 * b.0);
             }
         }
     }

@@ -86,7 +86,7 @@ impl PhaseDifferences {
         if !(obs.noise_var > 0.0) {
             return Err(OneStageError::InvalidObservation);
         }
-        let [za, zb, zc] = obs.prompt.normalized(libm::sqrtf(obs.noise_var));
+        let [za, zb, zc] = obs.prompt.normalized(crate::sqrtf(obs.noise_var));
         let [sb, sc] = self.sum;
         self.sum = [sb + zb * za.conj(), sc + zc * za.conj()];
         self.cn0_sum += libm::powf(10.0, 0.1 * obs.cn0_dbhz);
@@ -118,7 +118,7 @@ impl PhaseDifferences {
             return None;
         }
         let q_n = self.cn0_sum * epoch_s; // Σ q_T = q_T n
-        Some(0.5 * core::f32::consts::FRAC_1_PI / libm::sqrtf(q_n))
+        Some(0.5 * core::f32::consts::FRAC_1_PI / crate::sqrtf(q_n))
     }
 
     /// The average as the snapshot solver's input (two baselines, A→B and A→C): phases from

@@ -178,7 +178,7 @@ fn refined(
         }
     }
     // Parabola through the amplitudes of the best offset and its neighbours.
-    let amp = |j: usize| powers.get(j).map_or(0.0, |p| libm::sqrtf(p.max(0.0)));
+    let amp = |j: usize| powers.get(j).map_or(0.0, |p| crate::sqrtf(p.max(0.0)));
     let (am, a0, ap) = (
         amp(idx.wrapping_sub(1)),
         amp(idx),

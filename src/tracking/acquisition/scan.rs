@@ -295,9 +295,9 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             return (peak.power, floor.mean());
         }
         let (a0, am, ap) = (
-            libm::sqrtf(peak.power),
-            libm::sqrtf(peak.neighbours[0]),
-            libm::sqrtf(peak.neighbours[1]),
+            crate::sqrtf(peak.power),
+            crate::sqrtf(peak.neighbours[0]),
+            crate::sqrtf(peak.neighbours[1]),
         );
         // Triangle of half-width one chip sampled every 1023/N chips: the peak is
         // a0 / (1 − |δ|·1023/N) for an offset of δ bins.
@@ -446,7 +446,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             (before, p) = (p, after);
         }
         for &(p, k) in lines.iter().filter(|l| l.0 > 0.0) {
-            let half = libm::ceilf(libm::sqrtf(p / level) / core::f32::consts::PI) as usize;
+            let half = libm::ceilf(crate::sqrtf(p / level) / core::f32::consts::PI) as usize;
             let half = half.min(N / 8);
             for j in 0..=2 * half {
                 // (circular lines, N a power of two: wrapping is the modulo)
@@ -548,9 +548,9 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     pub(super) fn refine(&self, peak: &Peak, grid: &Grid) -> (f32, f32) {
         // Code phase: triangle interpolation on amplitudes; lag ℓ means phase (N − ℓ)·1023/N.
         let (a0, am, ap) = (
-            libm::sqrtf(peak.power),
-            libm::sqrtf(peak.neighbours[0]),
-            libm::sqrtf(peak.neighbours[1]),
+            crate::sqrtf(peak.power),
+            crate::sqrtf(peak.neighbours[0]),
+            crate::sqrtf(peak.neighbours[1]),
         );
         let denom = 2.0 * (a0 - am.min(ap));
         let delta = if denom > 0.0 {
@@ -563,7 +563,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
         let mut code_phase = (N as f32 - lag) * (len / N as f32);
         code_phase -= libm::floorf(code_phase / len) * len;
         // Doppler: parabola through the neighbouring bins' peak amplitudes.
-        let amp = |b: usize| self.peaks.get(b).map_or(0.0, |p| libm::sqrtf(p.0));
+        let amp = |b: usize| self.peaks.get(b).map_or(0.0, |p| crate::sqrtf(p.0));
         let bd = peak.bin;
         let (fm, f0, fp) = (
             if bd > 0 { amp(bd - 1) } else { 0.0 },

@@ -110,7 +110,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
             let after = power(&self.data[k.wrapping_add(1) & (N - 1)]);
             if p > TONE_FACTOR * level && p >= before && p > after {
                 // Parabola through the amplitudes; bin k is k kHz (wrapped to ±N/2).
-                let (a0, am, ap) = (libm::sqrtf(p), libm::sqrtf(before), libm::sqrtf(after));
+                let (a0, am, ap) = (crate::sqrtf(p), crate::sqrtf(before), crate::sqrtf(after));
                 let curv = 2.0 * a0 - am - ap;
                 let delta = if curv > 0.0 {
                     (0.5 * (ap - am) / curv).clamp(-0.5, 0.5)
