@@ -186,3 +186,36 @@ fn the_epoch_clock_rounds_the_middle_sample_to_the_grid() {
         "no overflow at the end of time"
     );
 }
+
+#[test]
+fn the_epoch_clock_equals_the_wide_division_at_every_epoch_length() {
+    // 16-bit digits below 32 768 samples per epoch, the 64-bit division above: both equal
+    // round((middle − origin)/n) done in u128 for any stamp, over days of samples and at
+    // the end of time.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut c = epoch([(0, 0); 3], [(0, 0); 3]).correlations;
+    for n in [1u32, 2600, 4092, 32_767, 32_768, 65_536, 100_000] {
+        let origin = next() % (1 << 40);
+        let clock = EpochClock::new(origin, n).unwrap();
+        for k in 0..20_000 {
+            c.first_sample = match k % 3 {
+                0 => origin.wrapping_add(next() % (1 << 45)),
+                1 => next(),
+                _ => u64::MAX - next() % (1 << 20),
+            };
+            c.samples = n + (next() % 3) as u32 - 1;
+            let twice_mid = u128::from(c.first_sample) * 2 + u128::from(c.samples);
+            let want = (twice_mid + u128::from(n))
+                .checked_sub(u128::from(origin) * 2)
+                .map(|s| s / (2 * u128::from(n)))
+                .and_then(|q| u64::try_from(q).ok());
+            assert_eq!(clock.epoch_of(&c), want, "n {n} stamp {}", c.first_sample);
+        }
+    }
+}

@@ -171,8 +171,42 @@ impl CodeNco {
             return u64::MAX;
         }
         let remaining = CODE_WRAP.saturating_sub(self.phase);
-        remaining.div_ceil(self.step).max(1)
+        div_ceil_by_estimate(remaining, self.step).max(1)
     }
+}
+
+/// `⌈n/d⌉` for `d > 0`, without a 64-bit division (a library call of about 150 instructions
+/// on the Cortex-M4, twice per channel and code period) where the code NCO lives: for
+/// `n < 2⁴²` (a code period is `CODE_WRAP < 2⁴²`) and `2²⁶ ≤ d < 2⁴²` (steps of at most
+/// 2¹⁶ samples per period) a 32-bit division of the operands' top bits gives `⌊n/d⌋`
+/// within one, which multiplications correct. Elsewhere, and should the correction not
+/// settle, the 64-bit division.
+fn div_ceil_by_estimate(n: u64, d: u64) -> u64 {
+    const SHIFT: u32 = 10;
+    if n >> (32 + SHIFT) == 0 && d >> (16 + SHIFT) != 0 && d >> (32 + SHIFT) == 0 {
+        // n' = ⌊n/2¹⁰⌋ < 2³², d' = ⌊d/2¹⁰⌋ ≥ 2¹⁶: n/d lies in (n'/d' − 1, n'/d' + 2⁻¹⁶)
+        let (n32, d32) = ((n >> SHIFT) as u32, (d >> SHIFT) as u32);
+        if let Some(estimate) = n32.checked_div(d32) {
+            // (q ≤ 2¹⁶ + 4 and d < 2⁴²: the products stay below 2⁵⁹)
+            let mut q = u64::from(estimate);
+            for _ in 0..4 {
+                if q.wrapping_mul(d) >= n {
+                    break;
+                }
+                q = q.saturating_add(1);
+            }
+            for _ in 0..4 {
+                if q == 0 || (q - 1).wrapping_mul(d) < n {
+                    break;
+                }
+                q -= 1;
+            }
+            if q.wrapping_mul(d) >= n && (q == 0 || (q - 1).wrapping_mul(d) < n) {
+                return q;
+            }
+        }
+    }
+    n.div_ceil(d)
 }
 
 /// The largest Doppler [`NcoSteering::carrier_step`] accepts, Hz (2¹⁹: ten times a LEO's).
@@ -377,5 +411,48 @@ mod steering_tests {
             NcoSteering::new(f64::NAN, 0.0),
             Err(SteeringError::NonFinite)
         );
+    }
+
+    #[test]
+    fn samples_to_wrap_is_the_exact_ceiling_across_the_estimates_range() {
+        // The estimate's range (periods up to 2¹⁶ samples and the phases of one period), its
+        // edges, and beyond them (the 64-bit division): always ⌈remaining/step⌉.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let edges = [
+            1,
+            (1 << 26) - 1,
+            1 << 26,
+            MIN_CODE_STEP,
+            (1 << 42) - 1,
+            1 << 42,
+        ];
+        for k in 0..200_000 {
+            let step = match k % 4 {
+                0 => (1 << 26) + next() % (1 << 32),
+                1 => edges[(next() % 6) as usize],
+                2 => 1 + next() % (1 << 44),
+                _ => CodeNco::step_for(CA_CHIP_RATE_HZ * 1.001, 2.6e6) - next() % (1 << 24),
+            };
+            let phase = match k % 3 {
+                0 => next() % CODE_WRAP,
+                1 => CODE_WRAP - next() % (1 << 20),
+                _ => next(),
+            };
+            let nco = CodeNco { phase, step };
+            let remaining = CODE_WRAP.saturating_sub(phase);
+            assert_eq!(
+                nco.samples_to_wrap(),
+                remaining.div_ceil(step).max(1),
+                "phase {phase} step {step}"
+            );
+        }
+        let stopped = CodeNco { phase: 0, step: 0 };
+        assert_eq!(stopped.samples_to_wrap(), u64::MAX);
     }
 }

@@ -248,24 +248,24 @@ pub(crate) fn combine(
     nc: u32,
     ns: u32,
 ) -> (i32, i32) {
-    let j_count = stream_count(complex, two_bit, three);
     // (in i64, exact for any u32 counts; the counts are at most 2¹⁶, the largest epoch, so
-    // the results fit i32 and the final saturation never acts)
-    let mut sums = [0i64; MAX_STREAMS];
-    for (j, (s, &pj)) in (0..MAX_STREAMS).zip(sums.iter_mut().zip(p)).take(j_count) {
+    // the results fit i32 and the final saturation never acts. Each stream's sum is taken
+    // where it is used: no array of sums to clear and fill, once per tap and epoch.)
+    let sum = |j: usize| {
         let n = if stream_uses_s(complex, two_bit, three, j) {
             ns
         } else {
             nc
         };
-        *s = i64::from(n) - 2 * i64::from(pj);
-    }
+        // (j < MAX_STREAMS: always present)
+        i64::from(n) - 2 * i64::from(p.get(j).copied().unwrap_or(0))
+    };
     // One product's sum: a 1-bit stream, or 2·sign − t for 2-bit samples.
     let product = |k: usize| {
         if two_bit {
-            2 * sums[2 * k] - sums[2 * k + 1]
+            2 * sum(2 * k) - sum(2 * k + 1)
         } else {
-            sums[k]
+            sum(k)
         }
     };
     let narrow = |v: i64| v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
