@@ -175,7 +175,7 @@ impl CodeNco {
     }
 }
 
-/// `⌈n/d⌉` for `d > 0`, without a 64-bit division (a library call of about 150 instructions
+/// `⌈n/d⌉` (`u64::MAX` for `d = 0`), without a 64-bit division (a library call of about 150 instructions
 /// on the Cortex-M4, twice per channel and code period) where the code NCO lives: for
 /// `n < 2⁴²` (a code period is `CODE_WRAP < 2⁴²`) and `2²⁶ ≤ d < 2⁴²` (steps of at most
 /// 2¹⁶ samples per period) a 32-bit division of the operands' top bits gives `⌊n/d⌋`
@@ -183,6 +183,9 @@ impl CodeNco {
 /// settle, the 64-bit division.
 fn div_ceil_by_estimate(n: u64, d: u64) -> u64 {
     const SHIFT: u32 = 10;
+    if d == 0 {
+        return u64::MAX;
+    }
     if n >> (32 + SHIFT) == 0 && d >> (16 + SHIFT) != 0 && d >> (32 + SHIFT) == 0 {
         // n' = ⌊n/2¹⁰⌋ < 2³², d' = ⌊d/2¹⁰⌋ ≥ 2¹⁶: n/d lies in (n'/d' − 1, n'/d' + 2⁻¹⁶)
         let (n32, d32) = ((n >> SHIFT) as u32, (d >> SHIFT) as u32);
@@ -347,12 +350,17 @@ mod steering_tests {
     use super::*;
     use crate::signal::{CA_CHIP_RATE_HZ, GPS_L1_HZ};
 
-    /// Random f32 in `[−1, 1)` from a xorshift.
-    fn uniform(state: &mut u64) -> f32 {
+    /// The next word of a xorshift.
+    fn xorshift(state: &mut u64) -> u64 {
         *state ^= *state << 13;
         *state ^= *state >> 7;
         *state ^= *state << 17;
-        ((*state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        *state
+    }
+
+    /// Random f32 in `[−1, 1)` from a xorshift.
+    fn uniform(state: &mut u64) -> f32 {
+        ((xorshift(state) >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
     }
 
     #[test]
@@ -418,12 +426,7 @@ mod steering_tests {
         // The estimate's range (periods up to 2¹⁶ samples and the phases of one period), its
         // edges, and beyond them (the 64-bit division): always ⌈remaining/step⌉.
         let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = || xorshift(&mut state);
         let edges = [
             1,
             (1 << 26) - 1,
