@@ -14,9 +14,9 @@
 //!   [`AttitudeSource::Fine`], and its attitude error against the flight's truth is below
 //!   [`RECEIVER_LIMIT_DEG`].
 //!
-//! With the `wrong-expected` feature every truth is perturbed (the attitudes rotated by
-//! [`WRONG_TRUTH_DEG`], the integers shifted by one cycle): every gate must then fail, which
-//! `.ci/run` checks.
+//! With `wrong-expected` on the semihosting command line ([`crate::cmdline`]) every truth is
+//! perturbed (the attitudes rotated by [`WRONG_TRUTH_DEG`], the integers shifted by one
+//! cycle): every gate must then fail, which `.ci/run` checks.
 
 use cortex_m_semihosting::hprintln;
 use gnss_attitude::attitude::example;
@@ -34,13 +34,13 @@ pub const SIGMA_FACTOR: f32 = 4.0;
 pub const SNAPSHOT_LIMIT_DEG: f32 = 0.3;
 /// Largest attitude error of the receiver at the end of the example flight, degrees.
 pub const RECEIVER_LIMIT_DEG: f32 = 0.05;
-/// Rotation of every truth attitude with the `wrong-expected` feature, degrees.
+/// Rotation of every truth attitude with `wrong-expected` on the command line, degrees.
 pub const WRONG_TRUTH_DEG: f32 = 1.0;
 
 /// The truth as the gates see it: unchanged, or rotated by [`WRONG_TRUTH_DEG`] about body x
-/// with the `wrong-expected` feature.
+/// with `wrong-expected` on the command line.
 fn truth(q: Quaternion<f32>) -> Quaternion<f32> {
-    if cfg!(feature = "wrong-expected") {
+    if crate::cmdline::wrong_expected() {
         q * Quaternion::from_rotation_vector(&Vector3::new(WRONG_TRUTH_DEG.to_radians(), 0.0, 0.0))
     } else {
         q
@@ -48,9 +48,9 @@ fn truth(q: Quaternion<f32>) -> Quaternion<f32> {
 }
 
 /// The true integer of baseline `i`, satellite `j` as the gates see it (one cycle off with the
-/// `wrong-expected` feature).
+/// `wrong-expected` on the command line).
 fn true_integer(i: usize, j: usize) -> i32 {
-    example::ambiguity(i, j) + i32::from(cfg!(feature = "wrong-expected"))
+    example::ambiguity(i, j) + i32::from(crate::cmdline::wrong_expected())
 }
 
 fn verdict(pass: bool) -> &'static str {

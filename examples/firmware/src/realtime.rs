@@ -33,6 +33,7 @@
 #![no_std]
 #![no_main]
 
+mod cmdline;
 #[path = "realtime/frontend.rs"]
 mod frontend;
 #[path = "realtime/memory.rs"]
@@ -51,6 +52,7 @@ use frontend::FrontEnd;
 
 #[entry]
 fn main() -> ! {
+    cmdline::read();
     hprintln!(
         "realtime: SampleReceiver<{}, 1024, BitCorrelator<3>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from bit1iq / sm2iq bytes, {} ms blocks, {} ms counted per front end",
         run::CHANNELS,
