@@ -6,7 +6,7 @@
 //! meets are injected; the run reports each stage's errors against the truth and against the
 //! bound host-sim computes for the same geometry and C/N0 ([`bound`]).
 //!
-//! After the flight, the ten-minute variants fly [`fault_runs`]: short flights on the fast
+//! Beside the flight, the ten-minute variants fly [`fault_runs`]: short flights on the fast
 //! path with every antenna blocked longer than the gyro may coast (the attitude is lost and
 //! the cold start finds it again) and with a faulty gyro (5 rad/s, stuck); their outcomes
 //! join `faults`, and the fraction of records whose error the reported σ covers (3σ) is
@@ -271,7 +271,7 @@ crate::metrics! {
         #[metric(unit = "")] pub fault_runs_within_3sigma_fraction: Option<f64>,
         /// Largest error over reported σ of the fault runs (null: none flown).
         #[metric(unit = "")] pub fault_runs_worst_error_over_sigma: Option<f64>,
-        /// Wall time of the fault runs (flown in parallel after the main flight).
+        /// Wall time of the fault runs (flown in parallel, beside the main flight).
         #[metric(wall = "s")] pub fault_runs_wall_s: f64,
         /// Time the fine filter first locked.
         #[metric(unit = "s")] pub fine_lock_s: f64,
@@ -396,13 +396,20 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
         eprintln!("host-sim: {}", orbit_note(tle, config)?);
     }
     let bar = crate::report::progress(config.duration_s as u64, "flight (s)");
-    let record = fly(config, Some(&bar))?;
+    // The fault runs are independent flights: flown beside the main flight, not after it.
+    let (record, fault_runs_flown) = rayon::join(
+        || fly(config, Some(&bar)),
+        || {
+            let fault_started = std::time::Instant::now();
+            let flown = fly_fault_runs(&fault_runs(config));
+            (flown, fault_started.elapsed().as_secs_f64())
+        },
+    );
+    let record = record?;
     bar.finish_and_clear();
+    let ((faults, coverage), fault_runs_wall_s) = (fault_runs_flown.0?, fault_runs_flown.1);
     let mut m = evaluate(&record, config.duration_s);
     m.faults = metrics::evaluate_faults(&record, &config.faults, NATURAL_FAULTS_AFTER_S);
-    let fault_started = std::time::Instant::now();
-    let (faults, coverage) = fly_fault_runs(&fault_runs(config))?;
-    let fault_runs_wall_s = fault_started.elapsed().as_secs_f64();
     m.faults.extend(faults);
     m.fault_runs_coverage = coverage;
     let wall_s = started.elapsed().as_secs_f64();
