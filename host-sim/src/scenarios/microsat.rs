@@ -407,7 +407,8 @@ fn run(config: &FlightConfig, ctx: &RunContext) -> Result<Outcome> {
     );
     let record = record?;
     bar.finish_and_clear();
-    let ((faults, coverage), fault_runs_wall_s) = (fault_runs_flown.0?, fault_runs_flown.1);
+    let (flown, fault_runs_wall_s) = fault_runs_flown;
+    let (faults, coverage) = flown?;
     let mut m = evaluate(&record, config.duration_s);
     m.faults = metrics::evaluate_faults(&record, &config.faults, NATURAL_FAULTS_AFTER_S);
     m.faults.extend(faults);
