@@ -16,6 +16,8 @@
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use cortex_m_semihosting::{nr, syscall1};
+use gnss_attitude::geometry::Quaternion;
+use nalgebra::Vector3;
 
 /// The word that perturbs the expected values.
 const WRONG_EXPECTED: &[u8] = b"wrong-expected";
@@ -38,6 +40,19 @@ pub fn read() {
 /// command line when [`read`] ran).
 pub fn wrong_expected() -> bool {
     WRONG_EXPECTED_REQUESTED.load(Ordering::Relaxed)
+}
+
+/// Rotation of every truth attitude with `wrong-expected` on the command line, degrees.
+pub const WRONG_TRUTH_DEG: f32 = 1.0;
+
+/// The truth attitude `q` as a gate sees it: unchanged, or with `wrong-expected` on the
+/// command line rotated by [`WRONG_TRUTH_DEG`] about body x.
+pub fn gate_truth(q: Quaternion<f32>) -> Quaternion<f32> {
+    if wrong_expected() {
+        q * Quaternion::from_rotation_vector(&Vector3::new(WRONG_TRUTH_DEG.to_radians(), 0.0, 0.0))
+    } else {
+        q
+    }
 }
 
 /// Copies the host's command line into `line`; returns its length in bytes (0 if the host has

@@ -15,14 +15,12 @@
 //!   [`RECEIVER_LIMIT_DEG`].
 //!
 //! With `wrong-expected` on the semihosting command line ([`crate::cmdline`]) every truth is
-//! perturbed (the attitudes rotated by [`WRONG_TRUTH_DEG`], the integers shifted by one
+//! perturbed (the attitudes rotated by [`crate::cmdline::WRONG_TRUTH_DEG`], the integers shifted by one
 //! cycle): every gate must then fail, which `.ci/run` checks.
 
 use cortex_m_semihosting::hprintln;
 use gnss_attitude::attitude::example;
-use gnss_attitude::geometry::Quaternion;
 use gnss_attitude::receiver::AttitudeSource;
-use nalgebra::Vector3;
 
 use crate::budget;
 
@@ -34,18 +32,7 @@ pub const SIGMA_FACTOR: f32 = 4.0;
 pub const SNAPSHOT_LIMIT_DEG: f32 = 0.3;
 /// Largest attitude error of the receiver at the end of the example flight, degrees.
 pub const RECEIVER_LIMIT_DEG: f32 = 0.05;
-/// Rotation of every truth attitude with `wrong-expected` on the command line, degrees.
-pub const WRONG_TRUTH_DEG: f32 = 1.0;
-
-/// The truth as the gates see it: unchanged, or rotated by [`WRONG_TRUTH_DEG`] about body x
-/// with `wrong-expected` on the command line.
-fn truth(q: Quaternion<f32>) -> Quaternion<f32> {
-    if crate::cmdline::wrong_expected() {
-        q * Quaternion::from_rotation_vector(&Vector3::new(WRONG_TRUTH_DEG.to_radians(), 0.0, 0.0))
-    } else {
-        q
-    }
-}
+use crate::cmdline::gate_truth as truth;
 
 /// The true integer of baseline `i`, satellite `j` as the gates see it (one cycle off with the
 /// `wrong-expected` on the command line).

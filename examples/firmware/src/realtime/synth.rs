@@ -55,9 +55,6 @@ pub const CODE_PHASE_CHIPS: [f64; 8] = [17.3, 905.6, 412.0, 233.9, 688.2, 1001.4
 /// Carrier phase of the eight satellites at sample 0 (array origin), cycles.
 pub const CARRIER_PHASE_CYCLES: [f32; 8] = [0.11, 0.73, 0.42, 0.95, 0.27, 0.58, 0.06, 0.84];
 
-/// Rotation of the gate's truth with `wrong-expected` on the command line, degrees.
-pub const WRONG_TRUTH_DEG: f32 = 1.0;
-
 const CHIP_RATE_HZ: f64 = 1.023e6;
 const L1_HZ: f64 = 1575.42e6;
 const CODE_CHIPS: u64 = 1023;
@@ -155,14 +152,9 @@ impl Synth {
 
     /// The true attitude (body to reference) at the centre of receiver epoch `epoch`, as the
     /// gate sees it: with `wrong-expected` on the semihosting command line rotated by
-    /// [`WRONG_TRUTH_DEG`] about body x (the gate must then fail; `.ci/run` checks it).
+    /// [`crate::cmdline::WRONG_TRUTH_DEG`] about body x (the gate must then fail; `.ci/run` checks it).
     pub fn truth(&self, epoch: u64) -> gnss_attitude::geometry::Quaternion<f32> {
-        let q = self.flight.attitude(epoch);
-        if crate::cmdline::wrong_expected() {
-            q * gnss_attitude::geometry::Quaternion::from_rotation_vector(&Vector3::new(WRONG_TRUTH_DEG.to_radians(), 0.0, 0.0))
-        } else {
-            q
-        }
+        crate::cmdline::gate_truth(self.flight.attitude(epoch))
     }
 
     /// The example flight (its aiding and gyro increments).
