@@ -3,10 +3,12 @@
 //! to 1 % off nominal), random block lengths (code-period wraps and span edges anywhere inside
 //! words), 1- and 2-bit samples, complex and real, 2- and 3-level carriers, both tap sets;
 //! with one scratch shared by two correlators that run in turn, as a receiver's channels do.
+//! A correlator built with the complex 2-level kernels only (firmware `realtime`'s) gives the
+//! same results where its kernels serve and refuses the other formats.
 
 use gnss_attitude::signal::bitwise::{
-    AntennaPlanes, BitBlock, BitCorrelator, BitCorrelatorConfig, BitScratch, CarrierLevels,
-    CodeTable, PlaneFormat, Resolution, ScalarReference,
+    AntennaPlanes, BitBlock, BitCorrelator, BitCorrelatorConfig, BitCorrelatorError, BitScratch,
+    CarrierLevels, CodeTable, PlaneFormat, Resolution, ScalarReference, COMPLEX_TWO_LEVEL_KERNELS,
 };
 use gnss_attitude::signal::{CorrelatorConfig, Prn, SlaveTaps};
 use proptest::prelude::*;
@@ -139,6 +141,24 @@ fn run_case(c: &Case) -> Result<usize, TestCaseError> {
     slow.carrier = fast.carrier();
     slow.code = fast.code();
     slow.carrier_total = fast.carrier_phase_total();
+    let lean_serves = c.complex && !c.three;
+    let mut lean = match BitCorrelator::<3, COMPLEX_TWO_LEVEL_KERNELS>::new(prn, &config) {
+        Ok(mut lean) => {
+            prop_assert!(lean_serves, "built without its kernel: {:?}", c);
+            lean.set_nco_steps(fast.carrier().step, fast.code().step)
+                .unwrap();
+            lean.set_code_phase(c.code_phase).unwrap();
+            lean.set_carrier_phase(c.carrier_phase).unwrap();
+            prop_assert_eq!(lean.code(), fast.code());
+            prop_assert_eq!(lean.carrier(), fast.carrier());
+            Some(lean)
+        }
+        Err(e) => {
+            prop_assert!(!lean_serves, "refused: {:?}", c);
+            prop_assert_eq!(e, BitCorrelatorError::KernelNotBuilt);
+            None
+        }
+    };
     // Another satellite's correlator on the same blocks, run before each call with the same
     // scratch: what it leaves there must not reach the results.
     let mut other = BitCorrelator::<3>::new(Prn::new(c.prn % 32 + 1).unwrap(), &config).unwrap();
@@ -154,7 +174,7 @@ fn run_case(c: &Case) -> Result<usize, TestCaseError> {
             .map(|x| AntennaPlanes::new(format, len, &x[0], &x[1], &x[2], &x[3]).unwrap())
             .collect();
         let block = BitBlock::new(first, &table, [ant[0], ant[1], ant[2]]).unwrap();
-        let (mut cf, mut cs, mut co) = (0usize, 0usize, 0usize);
+        let (mut cf, mut cs, mut co, mut cl) = (0usize, 0usize, 0usize, 0usize);
         // Bounded: each call advances the cursor or returns None at the block end.
         for _ in 0..64 {
             other.run_in(&block, &mut co, &mut scratch).unwrap();
@@ -165,6 +185,10 @@ fn run_case(c: &Case) -> Result<usize, TestCaseError> {
             prop_assert_eq!(fast.code(), slow.code);
             prop_assert_eq!(fast.carrier(), slow.carrier);
             prop_assert_eq!(fast.carrier_phase_total(), slow.carrier_total);
+            if let Some(lean) = lean.as_mut() {
+                prop_assert_eq!(lean.run_in(&block, &mut cl, &mut scratch).unwrap(), a);
+                prop_assert_eq!(cl, cf);
+            }
             if a.is_some() {
                 outputs += 1;
                 // Steer the NCOs between epochs as a tracking loop would.
@@ -172,6 +196,9 @@ fn run_case(c: &Case) -> Result<usize, TestCaseError> {
                 let f = (c.carrier_hz + df).clamp(-0.4999 * c.fs, 0.4999 * c.fs);
                 fast.set_carrier_frequency(f).unwrap();
                 slow.carrier = fast.carrier();
+                if let Some(lean) = lean.as_mut() {
+                    lean.set_carrier_frequency(f).unwrap();
+                }
             }
             if cf == len {
                 break;

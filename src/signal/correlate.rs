@@ -288,7 +288,7 @@ pub struct BitSettings {
     pub carrier: CarrierLevels,
 }
 
-impl<const A: usize> Correlate<A> for BitCorrelator<A> {
+impl<const A: usize, const KERNELS: u8> Correlate<A> for BitCorrelator<A, KERNELS> {
     type Block<'a> = BitBlock<'a, A>;
     type Settings = BitSettings;
     type Error = BitCorrelatorError;

@@ -12,7 +12,8 @@
 //!    kHz, 6 ms non-coherent + the 6 ms dwell) on the reference antenna's first 12 ms; the
 //!    receiver gets the lines of sight as its aiding (every 100 ms) and the gyro's increments;
 //! 3. the receiver runs the bit-parallel correlators (`SampleReceiver<8, 1024,
-//!    BitCorrelator<3>>`, 1- or 2-bit planes, [`run::CARRIER`]; E, P, L and N on the reference
+//!    BitCorrelator<3, COMPLEX_TWO_LEVEL_KERNELS>>`: only this front end's kernels linked, 1- or
+//!    2-bit planes, [`run::CARRIER`]; E, P, L and N on the reference
 //!    antenna, the prompt on the other two) with its block and window stages and its
 //!    channels' cross-correlation checks deferred (`set_deferred_stages`,
 //!    `set_deferred_checks`); warm-up until the attitude comes from the fine
@@ -54,7 +55,7 @@ use frontend::FrontEnd;
 fn main() -> ! {
     cmdline::read();
     hprintln!(
-        "realtime: SampleReceiver<{}, 1024, BitCorrelator<3>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from bit1iq / sm2iq bytes, {} ms blocks, {} ms counted per front end",
+        "realtime: SampleReceiver<{}, 1024, BitCorrelator<3, COMPLEX_TWO_LEVEL_KERNELS>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from bit1iq / sm2iq bytes, {} ms blocks, {} ms counted per front end",
         run::CHANNELS,
         core::mem::size_of::<run::Front>(),
         run::CARRIER,
@@ -62,9 +63,9 @@ fn main() -> ! {
         run::COUNT_MS
     );
     hprintln!(
-        "realtime sizes: Acquisition<1024> {} B, Channel<3, BitCorrelator<3>> {} B (x 8), AttitudeReceiver {} B, ObservationAdapter {} B",
+        "realtime sizes: Acquisition<1024> {} B, Channel<3, BitCorrelator<3, ..>> {} B (x 8), AttitudeReceiver {} B, ObservationAdapter {} B",
         core::mem::size_of::<gnss_attitude::tracking::Acquisition<1024>>(),
-        core::mem::size_of::<gnss_attitude::tracking::Channel<3, gnss_attitude::signal::bitwise::BitCorrelator<3>>>(),
+        core::mem::size_of::<gnss_attitude::tracking::Channel<3, run::Correlator>>(),
         core::mem::size_of::<gnss_attitude::receiver::AttitudeReceiver>(),
         core::mem::size_of::<gnss_attitude::receiver::ObservationAdapter>()
     );

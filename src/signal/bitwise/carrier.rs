@@ -207,6 +207,7 @@ fn rotate(hi: u32, lo: u32, st: &CarrierStep) -> (u32, u32) {
 
 /// Fills `out` with the carrier words of consecutive words, the first starting at phase
 /// `phase`. 2-level masks are all ones.
+#[inline(always)]
 pub(crate) fn fill(out: &mut [CarrierWords], levels: CarrierLevels, phase: u32, st: &CarrierStep) {
     match levels {
         CarrierLevels::Two => fill_levels::<false>(out, phase, st),

@@ -67,6 +67,10 @@ pub enum BitCorrelatorError {
     /// The block's code table is of another sample rate.
     #[error("code table of another sample rate")]
     TableMismatch,
+    /// The format and carrier levels asked for are not among the kernels this correlator type
+    /// was built with (its `KERNELS` parameter, [`kernel_bit`]).
+    #[error("no kernel built for this plane format and carrier")]
+    KernelNotBuilt,
 }
 
 impl crate::error::Error for BitCorrelatorError {
@@ -126,10 +130,39 @@ impl BitCorrelatorConfig {
     }
 }
 
+/// The bit of [`BitCorrelator`]'s `KERNELS` parameter that builds the kernel of `format` with
+/// the `carrier` replica: one of eight (complex or real IF × 1- or 2-bit × 2- or 3-level).
+pub const fn kernel_bit(format: PlaneFormat, carrier: CarrierLevels) -> u8 {
+    let three = matches!(carrier, CarrierLevels::Three);
+    kernel_bit_of(format.complex, format.two_bit(), three)
+}
+
+/// [`kernel_bit`] from the kernel's three switches.
+const fn kernel_bit_of(complex: bool, two_bit: bool, three: bool) -> u8 {
+    1 << ((complex as u8) * 4 + (two_bit as u8) * 2 + three as u8)
+}
+
+/// Every kernel: the default of [`BitCorrelator`]'s `KERNELS`.
+pub const ALL_KERNELS: u8 = u8::MAX;
+
+/// The kernels of a complex front end with the 2-level carrier, 1- and 2-bit (the flight
+/// configuration of firmware `realtime`: 11 KB less flash than [`ALL_KERNELS`]).
+pub const COMPLEX_TWO_LEVEL_KERNELS: u8 =
+    kernel_bit_of(true, false, false) | kernel_bit_of(true, true, false);
+
+/// The kernel bits of the 3-level carrier.
+const THREE_LEVEL_KERNELS: u8 = 0b1010_1010;
+
 /// The bit-parallel correlator of one satellite over `A` antennas.
+///
+/// `KERNELS` is the set of kernels compiled in, as [`kernel_bit`]s (default: all). A firmware
+/// that knows its front end names its own (e.g. [`COMPLEX_TWO_LEVEL_KERNELS`]) and the others
+/// are left out of the program; [`BitCorrelator::new`] refuses a format and carrier outside
+/// the set ([`BitCorrelatorError::KernelNotBuilt`]). The results of a kernel are the same in
+/// every set.
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct BitCorrelator<const A: usize> {
+pub struct BitCorrelator<const A: usize, const KERNELS: u8 = ALL_KERNELS> {
     prn: Prn,
     sample_rate_hz: f64,
     format: PlaneFormat,
@@ -154,17 +187,25 @@ pub struct BitCorrelator<const A: usize> {
     partial: bool,
 }
 
-impl<const A: usize> BitCorrelator<A> {
+impl<const A: usize, const KERNELS: u8> BitCorrelator<A, KERNELS> {
+    /// Whether the 3-level carrier's kernels are built (if not, the 3-level paths of the
+    /// replica are left out too).
+    const THREE_LEVEL_BUILT: bool = KERNELS & THREE_LEVEL_KERNELS != 0;
+
     /// A correlator for `prn` with the NCOs at zero phase, the configured IF and the nominal
     /// code rate.
     ///
     /// # Errors
     /// As [`BitCorrelatorConfig::validate`]; [`BitCorrelatorError::InvalidConfig`] for
-    /// `A = 0`.
+    /// `A = 0`; [`BitCorrelatorError::KernelNotBuilt`] for a format and carrier outside
+    /// `KERNELS`.
     pub fn new(prn: Prn, config: &BitCorrelatorConfig) -> Result<Self, BitCorrelatorError> {
         config.validate(prn)?;
         if A == 0 {
             return Err(BitCorrelatorError::InvalidConfig);
+        }
+        if KERNELS & kernel_bit(config.format, config.carrier) == 0 {
+            return Err(BitCorrelatorError::KernelNotBuilt);
         }
         let c = &config.correlator;
         let step = CodeNco::step_for(CA_CHIP_RATE_HZ, c.sample_rate_hz);
@@ -433,7 +474,7 @@ impl<const A: usize> BitCorrelator<A> {
     /// The taps of the integration so far.
     fn taps(&self) -> [Taps; A] {
         let (cx, tb) = (self.format.complex, self.format.two_bit());
-        let l3 = self.levels == CarrierLevels::Three;
+        let l3 = self.three_level();
         let [nc, ns] = self.support;
         let mut out = [Taps::default(); A];
         // (indices from `0..A`, not `enumerate`: its counter keeps an overflow check)
@@ -497,7 +538,7 @@ impl<const A: usize> BitCorrelator<A> {
         let nw = w1.saturating_sub(w0).min(CHUNK_WORDS);
         let lead = s.saturating_sub(w0.saturating_mul(WORD_SAMPLES));
         let tail = w1.saturating_mul(WORD_SAMPLES).saturating_sub(stop);
-        let l3 = self.levels == CarrierLevels::Three;
+        let l3 = self.three_level();
         self.carrier_words(nw, lead, tail, work);
         self.code_words(block.table(), nw, lead, tail, work);
         if l3 {
@@ -522,17 +563,48 @@ impl<const A: usize> BitCorrelator<A> {
             };
             let all = a == 0 || self.slave_taps == SlaveTaps::All;
             let n = (nw, edges);
+            // (each arm's guard is a constant: the kernels not built are not compiled in)
             match (cx, tb, l3) {
-                (true, false, false) => antenna::<true, false, false>(p, work, n, all, acc),
-                (true, true, false) => antenna::<true, true, false>(p, work, n, all, acc),
-                (true, false, true) => antenna::<true, false, true>(p, work, n, all, acc),
-                (true, true, true) => antenna::<true, true, true>(p, work, n, all, acc),
-                (false, false, false) => antenna::<false, false, false>(p, work, n, all, acc),
-                (false, true, false) => antenna::<false, true, false>(p, work, n, all, acc),
-                (false, false, true) => antenna::<false, false, true>(p, work, n, all, acc),
-                (false, true, true) => antenna::<false, true, true>(p, work, n, all, acc),
+                (true, false, false) if Self::built(true, false, false) => {
+                    antenna::<true, false, false>(p, work, n, all, acc);
+                }
+                (true, true, false) if Self::built(true, true, false) => {
+                    antenna::<true, true, false>(p, work, n, all, acc);
+                }
+                (true, false, true) if Self::built(true, false, true) => {
+                    antenna::<true, false, true>(p, work, n, all, acc);
+                }
+                (true, true, true) if Self::built(true, true, true) => {
+                    antenna::<true, true, true>(p, work, n, all, acc);
+                }
+                (false, false, false) if Self::built(false, false, false) => {
+                    antenna::<false, false, false>(p, work, n, all, acc);
+                }
+                (false, true, false) if Self::built(false, true, false) => {
+                    antenna::<false, true, false>(p, work, n, all, acc);
+                }
+                (false, false, true) if Self::built(false, false, true) => {
+                    antenna::<false, false, true>(p, work, n, all, acc);
+                }
+                (false, true, true) if Self::built(false, true, true) => {
+                    antenna::<false, true, true>(p, work, n, all, acc);
+                }
+                // (a kernel not built: `new` refused its format and carrier)
+                _ => {}
             }
         }
+    }
+
+    /// Whether the kernel of `(complex, two_bit, three)` is built.
+    #[inline(always)]
+    const fn built(complex: bool, two_bit: bool, three: bool) -> bool {
+        KERNELS & kernel_bit_of(complex, two_bit, three) != 0
+    }
+
+    /// Whether the replica is 3-level (always `false` when no 3-level kernel is built).
+    #[inline(always)]
+    fn three_level(&self) -> bool {
+        Self::THREE_LEVEL_BUILT && self.levels == CarrierLevels::Three
     }
 
     /// The carrier words of the chunk's `nw` words into the workspace, with the span's edges
@@ -545,7 +617,11 @@ impl<const A: usize> BitCorrelator<A> {
             .wrapping_sub(self.carrier.step.wrapping_mul(lead as u32));
         let step = CarrierStep::new(self.carrier.step);
         let words = work.carrier.get_mut(..nw).unwrap_or_default();
-        carrier::fill(words, self.levels, phase, &step);
+        if self.three_level() {
+            carrier::fill(words, CarrierLevels::Three, phase, &step);
+        } else {
+            carrier::fill(words, CarrierLevels::Two, phase, &step);
+        }
         if let Some(first) = words.first_mut() {
             let mask = u32::MAX << (lead & 31);
             first.nzc &= mask;
@@ -606,7 +682,7 @@ impl<const A: usize> BitCorrelator<A> {
         for (taps, offset) in work.taps.iter_mut().zip(offsets) {
             window_words(taps.get_mut(..nw).unwrap_or_default(), &work.prompt, offset);
         }
-        if self.levels == CarrierLevels::Three {
+        if self.three_level() {
             let carrier = work.carrier.iter().take(nw);
             for (tc, ts) in work.taps.iter_mut().zip(work.taps_s.iter_mut()) {
                 for ((c, s), r) in tc.iter_mut().zip(ts.iter_mut()).zip(carrier.clone()) {

@@ -110,7 +110,11 @@
 //! one for all the correlators that run in turn (a
 //! [`SampleReceiver`](crate::receiver::SampleReceiver) keeps one for its channels). The
 //! [`CodeTable`] (8 KiB) is shared by every correlator of a front end through the blocks. Planes cost 4 bytes per 32 samples and
-//! plane. Measured costs (Cortex-M4F instruction counts of the firmware's budget regions, host
+//! plane. Code: each of the eight kernels (complex or real IF × 1- or 2-bit × 2- or
+//! 3-level carrier) is 1.1–1.8 KB of Cortex-M4 code; `BitCorrelator<A, KERNELS>` compiles in
+//! only the [`kernel_bit`]s of `KERNELS` (default [`ALL_KERNELS`]), e.g.
+//! [`COMPLEX_TWO_LEVEL_KERNELS`] for a complex front end (firmware `realtime`: 11.8 KB less
+//! flash), and refuses the other formats at construction. Measured costs (Cortex-M4F instruction counts of the firmware's budget regions, host
 //! times of `benches/correlator.rs`) are printed by `.ci/run`: on the M4F, 3 antennas ×
 //! 1 satellite at 2.6 Msps complex with prompt-only slaves cost 4.16 instructions per
 //! sample·channel for 1-bit samples and the 2-level carrier, 6.26 for 2-bit samples (3-level
@@ -135,6 +139,9 @@ pub mod selftest;
 pub use block::BitBlock;
 pub use carrier::CarrierLevels;
 pub use code::CodeTable;
-pub use correlator::{BitCorrelator, BitCorrelatorConfig, BitCorrelatorError, BitScratch};
+pub use correlator::{
+    kernel_bit, BitCorrelator, BitCorrelatorConfig, BitCorrelatorError, BitScratch, ALL_KERNELS,
+    COMPLEX_TWO_LEVEL_KERNELS,
+};
 pub use planes::{AntennaPlanes, PlaneBuffer, PlaneError, PlaneFormat, Resolution};
 pub use reference::ScalarReference;

@@ -8,7 +8,7 @@ use cortex_m_semihosting::hprintln;
 use gnss_attitude::attitude::example::SKY;
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, SampleFrontConfig, SampleReceiver, SampleReport};
-use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneError};
+use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneError, COMPLEX_TWO_LEVEL_KERNELS};
 use gnss_attitude::signal::nco::CodeNco;
 use gnss_attitude::signal::{BitSettings, Prn, SlaveTaps, CA_CHIP_RATE_HZ};
 use gnss_attitude::tracking::SearchSamples;
@@ -20,9 +20,12 @@ use super::synth::{predicted_doppler_hz, Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SA
 
 /// Channels (one per satellite; each tracks the three antennas).
 pub const CHANNELS: usize = 8;
+/// The bit-parallel correlator: three antennas, and only the kernels of this front end (complex
+/// 1- and 2-bit samples, the 2-level carrier [`CARRIER`]): the other six are not linked.
+pub type Correlator = BitCorrelator<3, COMPLEX_TWO_LEVEL_KERNELS>;
 /// The receiver: 8 channels, 1024-point acquisition, bit-parallel correlators over the three
 /// antennas' bit planes.
-pub type Front = SampleReceiver<CHANNELS, 1024, BitCorrelator<3>>;
+pub type Front = SampleReceiver<CHANNELS, 1024, Correlator>;
 /// The carrier replica's levels: the 2-level replica (the M4F's cheaper kernel; 0.91 dB of
 /// carrier quantization against 0.35 dB for the 3-level one, docs/METHODS.md).
 pub const CARRIER: CarrierLevels = CarrierLevels::Two;
