@@ -41,15 +41,52 @@ pub trait Error: fmt::Debug + fmt::Display {
     fn kind(&self) -> ErrorKind;
 }
 
-impl fmt::Display for ErrorKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
+impl ErrorKind {
+    /// What the kind means, in a few words (`"invalid input"`): its `Display` text, for
+    /// reports that do without `core::fmt` (firmware printing through semihosting or a UART).
+    pub const fn as_str(self) -> &'static str {
+        match self {
             Self::NonFinite => "non-finite input",
             Self::InvalidInput => "invalid input",
             Self::NotPositiveDefinite => "matrix not positive definite",
             Self::Unobservable => "not observable",
             Self::NotConverged => "iteration bound reached",
             Self::Numerical => "numerical failure",
-        })
+        }
+    }
+}
+
+impl fmt::Display for ErrorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ErrorKind;
+    use core::fmt::Write;
+
+    const ALL: [ErrorKind; 6] = [
+        ErrorKind::NonFinite,
+        ErrorKind::InvalidInput,
+        ErrorKind::NotPositiveDefinite,
+        ErrorKind::Unobservable,
+        ErrorKind::NotConverged,
+        ErrorKind::Numerical,
+    ];
+
+    #[test]
+    fn each_kind_names_itself_apart_and_displays_its_words() {
+        for (i, kind) in ALL.into_iter().enumerate() {
+            let mut shown = heapless::String::<40>::new();
+            write!(shown, "{kind}").expect("fits");
+            assert_eq!(shown.as_str(), kind.as_str());
+            assert!(!kind.as_str().is_empty());
+            assert!(
+                ALL[..i].iter().all(|k| k.as_str() != kind.as_str()),
+                "{kind:?} repeats a name"
+            );
+        }
     }
 }

@@ -91,6 +91,7 @@ impl<const N: usize, T: Real> Ekf<N, T> {
     /// # Errors
     /// [`FilterError::NonFiniteInput`] for a non-finite element;
     /// [`FilterError::InvalidCovariance`] when `p0` is not positive definite.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn new(x0: SVector<T, N>, p0: SMatrix<T, N, N>) -> Result<Self, FilterError> {
         if !all_finite(&x0) || !all_finite(&p0) {
             return Err(FilterError::NonFiniteInput);

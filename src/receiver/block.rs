@@ -49,6 +49,7 @@ impl AttitudeReceiver {
     }
 
     /// The block's stage: the fine update with its phase differences.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub(super) fn run_block(&mut self, work: &BlockWork) {
         self.update_gyro_fine(work.k, work.centre, &work.m_centre, &work.blocks);
     }

@@ -500,6 +500,7 @@ impl AttitudeReceiver {
     /// attitude ([`LossReason::EpochJump`]). An epoch beyond the last one
     /// [`Self::push_observation`] accepts (within 2⁴⁰ of `u64::MAX`) closes through that one:
     /// a closed epoch is never opened again.
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn close_through(&mut self, epoch: u64) {
         let Some(limit) = self.epochs.plan_close(epoch) else {
             return;

@@ -31,10 +31,20 @@
 //! construction (`SampleReceiver::with_settings`, by value: its frame is 53 KB, the receiver
 //! 78 KB) and the acquisition (62 KB of `i8` samples beside the receiver) do not fit an
 //! STM32F405's 128 KiB; the firmware prints what each phase needs against that target.
+//!
+//! Its reports go through [`say!`] ([`say`]), not `core::fmt` (15 KiB of flash), and the code
+//! outside the counted regions (the synthesizer, the reports, the sky search) is built for
+//! size, `#[optimize(size)]`: the firmware fits the 256 KiB flash target (`.ci/run` prints it).
 #![no_std]
+// (nightly, as build-std already needs: `#[optimize(size)]` on the code outside the counts)
+#![feature(optimize_attribute)]
 #![no_main]
 
 mod cmdline;
+// (first: its `say!` is in scope in the modules below)
+#[macro_use]
+#[path = "realtime/say.rs"]
+mod say;
 #[path = "realtime/frontend.rs"]
 mod frontend;
 #[path = "realtime/memory.rs"]
@@ -47,27 +57,36 @@ mod run;
 mod synth;
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::debug;
 
 use frontend::FrontEnd;
 
 #[entry]
 fn main() -> ! {
     cmdline::read();
-    hprintln!(
-        "realtime: SampleReceiver<{}, 1024, BitCorrelator<3, COMPLEX_TWO_LEVEL_KERNELS>> {} B ({:?} carrier), 3 antennas x 8 satellites, 2.6 Msps complex from bit1iq / sm2iq bytes, {} ms blocks, {} ms counted per front end",
+    say!(
+        "realtime: SampleReceiver<",
         run::CHANNELS,
+        ", 1024, BitCorrelator<3, COMPLEX_TWO_LEVEL_KERNELS>> ",
         core::mem::size_of::<run::Front>(),
+        " B (",
         run::CARRIER,
+        " carrier), 3 antennas x 8 satellites, 2.6 Msps complex from bit1iq / sm2iq bytes, ",
         run::BLOCK_MS,
-        run::COUNT_MS
+        " ms blocks, ",
+        run::COUNT_MS,
+        " ms counted per front end"
     );
-    hprintln!(
-        "realtime sizes: Acquisition<1024> {} B, Channel<3, BitCorrelator<3, ..>> {} B (x 8), AttitudeReceiver {} B, ObservationAdapter {} B",
+    say!(
+        "realtime sizes: Acquisition<1024> ",
         core::mem::size_of::<gnss_attitude::tracking::Acquisition<1024>>(),
+        " B, Channel<3, BitCorrelator<3, ..>> ",
         core::mem::size_of::<gnss_attitude::tracking::Channel<3, run::Correlator>>(),
+        " B (x 8), AttitudeReceiver ",
         core::mem::size_of::<gnss_attitude::receiver::AttitudeReceiver>(),
-        core::mem::size_of::<gnss_attitude::receiver::ObservationAdapter>()
+        " B, ObservationAdapter ",
+        core::mem::size_of::<gnss_attitude::receiver::ObservationAdapter>(),
+        " B"
     );
     let mut all = true;
     let mut stacks = [0usize; 3];
@@ -75,16 +94,24 @@ fn main() -> ! {
         // (each front end's stack measured alone: the previous run's marks painted over)
         memory::paint_below();
         let o = run::run(front_end);
-        hprintln!(
-            "realtime {}: regions {}..={} count {} ms, 3 regions per ms (pack the bytes into planes; push_samples + gyro increments; run_deferred); fine from epoch {:?}; final attitude {:?}, error {} deg (limit {} deg): {}",
+        say!(
+            "realtime ",
             front_end.name(),
+            ": regions ",
             o.regions.0,
+            "..=",
             o.regions.1,
+            " count ",
             o.counted_ms,
+            " ms, 3 regions per ms (pack the bytes into planes; push_samples + gyro increments; run_deferred); fine from epoch ",
             o.fine_at,
+            "; final attitude ",
             o.source,
+            ", error ",
             fixed::fixed(o.error_deg, 4),
+            " deg (limit ",
             fixed::fixed(run::LIMIT_DEG, 2),
+            " deg): ",
             if o.pass { "PASS" } else { "FAIL" }
         );
         all &= o.pass;
@@ -94,22 +121,30 @@ fn main() -> ! {
     }
     let (flash, ram) = memory::flash_and_static();
     let worst = stacks[0].max(stacks[1]).max(stacks[2]);
-    hprintln!(
-        "realtime memory: flash {} B, static RAM {} B, worst stack {} B (construction, SampleReceiver::with_settings: {} B; acquisition: {} B; tracking, the receiver's {} B + the 1 ms block's bytes and planes + synthesis + push_samples + run_deferred: {} B), RAM (static + worst stack) {} B",
+    say!(
+        "realtime memory: flash ",
         flash,
+        " B, static RAM ",
         ram,
+        " B, worst stack ",
         worst,
+        " B (construction, SampleReceiver::with_settings: ",
         stacks[0],
+        " B; acquisition: ",
         stacks[1],
+        " B; tracking, the receiver's ",
         core::mem::size_of::<run::Front>(),
+        " B + the 1 ms block's bytes and planes + synthesis + push_samples + run_deferred: ",
         stacks[2],
-        ram + worst
+        " B), RAM (static + worst stack) ",
+        ram + worst,
+        " B"
     );
     if all {
-        hprintln!("realtime: all PASS");
+        say!("realtime: all PASS");
         debug::exit(debug::EXIT_SUCCESS);
     } else {
-        hprintln!("realtime: FAILED");
+        say!("realtime: FAILED");
         debug::exit(debug::EXIT_FAILURE);
     }
     loop {
@@ -119,16 +154,20 @@ fn main() -> ! {
 
 #[exception]
 unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    hprintln!("HardFault at pc {:#010x}", frame.pc());
+    say!("HardFault at pc ", say::Hex(frame.pc()));
     debug::exit(debug::EXIT_FAILURE);
     loop {
         cortex_m::asm::nop();
     }
 }
 
+/// The panic's place (its message would need `core::fmt`, [`say`]).
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("panic: {}", info);
+    match info.location() {
+        Some(at) => say!("panic at ", at.file(), ":", at.line(), ":", at.column()),
+        None => say!("panic"),
+    }
     debug::exit(debug::EXIT_FAILURE);
     loop {
         cortex_m::asm::nop();

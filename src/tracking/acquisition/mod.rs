@@ -485,6 +485,7 @@ impl<const N: usize, const L: usize> Acquisition<N, L> {
     ///
     /// # Errors
     /// As [`Acquisition::search_report_cancelling`] and [`Acquisition::search_report_near`].
+    #[cfg_attr(feature = "optimize-cold", optimize(size))]
     pub fn search_report_cancelling_near(
         &mut self,
         prn: Prn,

@@ -1,9 +1,8 @@
-//! Decimal fixed-point printing of the reports' floats with integer formatting only, so that
-//! the firmware does not link core's float formatting (`flt2dec`, its Grisu and Dragon tables
-//! and code: about 20 KiB of flash that a flight build, printing through `defmt`, would not
-//! carry either).
+//! Decimal fixed-point printing of the reports' floats with integer arithmetic only, so that
+//! the firmware links neither core's float formatting (`flt2dec`, its Grisu and Dragon tables
+//! and code: about 20 KiB of flash) nor the rest of `core::fmt` ([`super::say`]).
 
-use core::fmt;
+use super::say::{Line, Say};
 
 /// A value printed with a fixed number of decimals (at most 6), rounded half away from zero;
 /// `NaN` and magnitudes beyond 10¹² as `NaN` and `inf`.
@@ -21,29 +20,37 @@ pub fn fixed(value: impl Into<f64>, decimals: u32) -> Fixed {
     }
 }
 
-impl fmt::Display for Fixed {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Say for Fixed {
+    #[inline(never)]
+    #[optimize(size)]
+    fn say(&self, line: &mut Line) {
         let v = self.value;
         if v.is_nan() {
-            return f.write_str("NaN");
+            return line.bytes(b"NaN");
         }
-        let sign = if v < 0.0 { "-" } else { "" };
+        let sign: &[u8] = if v < 0.0 { b"-" } else { b"" };
         if !(v.abs() < 1e12) {
-            return write!(f, "{sign}inf");
+            line.bytes(sign);
+            return line.bytes(b"inf");
         }
         let scale = 10u64.pow(self.decimals);
         // (below 10¹⁸ < 2⁶⁴: in range; `as` truncates, the added half rounds)
         let m = (v.abs() * scale as f64 + 0.5) as u64;
-        let sign = if m == 0 { "" } else { sign };
-        if self.decimals == 0 {
-            return write!(f, "{sign}{m}");
+        if m != 0 {
+            line.bytes(sign);
         }
-        write!(
-            f,
-            "{sign}{}.{:0w$}",
-            m / scale,
-            m % scale,
-            w = self.decimals as usize
-        )
+        (m / scale).say(line);
+        if self.decimals == 0 {
+            return;
+        }
+        line.bytes(b".");
+        // the fraction's digits, leading zeros kept: 10^decimals + fraction without its 1
+        let mut digits = [0u8; 7];
+        let mut f = m % scale + scale;
+        for d in digits[..=self.decimals as usize].iter_mut().rev() {
+            *d = b'0' + (f % 10) as u8;
+            f /= 10;
+        }
+        line.bytes(&digits[1..=self.decimals as usize]);
     }
 }

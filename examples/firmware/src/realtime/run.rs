@@ -4,16 +4,16 @@
 use core::hint::black_box;
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use cortex_m_semihosting::hprintln;
 use gnss_attitude::attitude::example::SKY;
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeSource, ReceiverConfig, ReceiverError, SampleFrontConfig, SampleReceiver, SampleReport};
 use gnss_attitude::signal::bitwise::{BitBlock, BitCorrelator, CarrierLevels, CodeTable, PlaneBuffer, PlaneError, COMPLEX_TWO_LEVEL_KERNELS};
 use gnss_attitude::signal::nco::CodeNco;
 use gnss_attitude::signal::{BitSettings, Prn, SlaveTaps, CA_CHIP_RATE_HZ};
-use gnss_attitude::tracking::SearchSamples;
+use gnss_attitude::tracking::{SearchResult, SearchSamples};
 
 use super::fixed::fixed;
+use crate::say::{Line, Refusal, Say};
 use super::frontend::FrontEnd;
 use super::memory;
 use super::synth::{predicted_doppler_hz, Synth, CODE_PHASE_CHIPS, DOPPLER_HZ, SAMPLES_PER_MS, SAMPLE_RATE_HZ};
@@ -95,15 +95,28 @@ pub fn front_config() -> SampleFrontConfig {
 }
 
 /// Why a block did not reach the receiver, or what the receiver refused.
-// (the fields are read by the refusal's `Debug` print)
-#[allow(dead_code)]
-#[derive(Debug)]
 pub enum BlockError {
     /// The front end's bytes did not pack into a whole block of planes (the packing's error;
     /// `PlaneLength` for a short block).
     Plane(PlaneError),
     /// The receiver refused the block.
     Receiver(ReceiverError),
+}
+
+impl Say for BlockError {
+    /// Which stage refused and its error's kind: `packing refused (invalid input)`.
+    fn say(&self, line: &mut Line) {
+        match self {
+            BlockError::Plane(e) => {
+                line.bytes(b"packing ");
+                Refusal(e).say(line);
+            }
+            BlockError::Receiver(e) => {
+                line.bytes(b"receiver ");
+                Refusal(e).say(line);
+            }
+        }
+    }
 }
 
 /// The antennas' bit planes of one block, packed from the front end's bytes
@@ -158,6 +171,7 @@ pub struct Outcome {
 /// 15.6 KB where `i8` samples took 62 KB). The searches are counted as one region (printed
 /// with the number detected). Returns the number detected.
 #[inline(never)]
+#[optimize(size)]
 fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [[u8; BLOCK_BYTES]; 3], planes: &mut [PlaneBuffer<WORDS>; 3]) -> usize {
     let mut collected = PlaneBuffer::<ACQUISITION_WORDS>::new(front_end.plane_format());
     let first = synth.next_sample();
@@ -165,43 +179,70 @@ fn acquire(rx: &mut Front, synth: &mut Synth, front_end: FrontEnd, bytes: &mut [
         let [b0, b1, b2] = bytes;
         let n = front_end.block_bytes();
         synth.fill_bytes(front_end, [&mut b0[..n], &mut b1[..n], &mut b2[..n]]);
-        let appended = pack_block(front_end, planes, [&b0[..n], &b1[..n], &b2[..n]]).map_err(|e| hprintln!("realtime {}: acquisition block refused: {:?}", front_end.name(), e)).and_then(|()| collected.append(&planes[0].planes()).map_err(|e| hprintln!("realtime {}: acquisition planes refused: {:?}", front_end.name(), e)));
+        let appended = pack_block(front_end, planes, [&b0[..n], &b1[..n], &b2[..n]]).map_err(|e| say!("realtime ", front_end.name(), ": acquisition block ", e)).and_then(|()| collected.append(&planes[0].planes()).map_err(|e| say!("realtime ", front_end.name(), ": acquisition planes ", Refusal(&e))));
         if appended.is_err() {
             return 0;
         }
     }
     let samples = SearchSamples::Planes(collected.planes());
-    let mut search = |s: usize, prn: u8| Prn::new(prn).map(|prn| rx.search_samples_near(prn, samples, first, predicted_doppler_hz(s)));
-    let search_all = || core::array::from_fn::<_, { SKY.len() }, _>(|s| SKY.get(s).and_then(|&(prn, _, _)| search(s, prn)));
-    let (region, results) = count(search_all);
+    let (region, results) = count(|| search_sky(rx, samples, first));
     let mut detected = 0;
     for (s, result) in results.iter().enumerate() {
         match result {
             Some(Ok(r)) => {
                 detected += usize::from(r.detected);
-                hprintln!(
-                    "realtime {}: search PRN {}: detected {} Doppler {} Hz (truth {}, predicted {}), code phase {} chips (truth {})",
+                say!(
+                    "realtime ",
                     front_end.name(),
+                    ": search PRN ",
                     r.prn.number(),
+                    ": detected ",
                     r.detected,
+                    " Doppler ",
                     fixed(r.doppler_hz, 1),
+                    " Hz (truth ",
                     fixed(DOPPLER_HZ[s], 1),
+                    ", predicted ",
                     fixed(predicted_doppler_hz(s), 1),
+                    "), code phase ",
                     fixed(r.code_phase_chips, 3),
-                    fixed(CODE_PHASE_CHIPS[s], 3)
+                    " chips (truth ",
+                    fixed(CODE_PHASE_CHIPS[s], 3),
+                    ")"
                 );
             }
-            Some(Err(e)) => hprintln!("realtime {}: search of sky entry {} refused: {:?}", front_end.name(), s, e),
-            None => hprintln!("realtime {}: sky entry {} is no PRN", front_end.name(), s),
+            Some(Err(e)) => say!("realtime ", front_end.name(), ": search of sky entry ", s, " ", Refusal(e)),
+            None => say!("realtime ", front_end.name(), ": sky entry ", s, " is no PRN"),
         }
     }
-    hprintln!("realtime {}: acquisition region {}: {} of {} PRNs detected (+-2 kHz about the predicted Doppler, {} ms non-coherent, on bit planes)", front_end.name(), region, detected, SKY.len(), ACQUISITION_MS);
+    say!(
+        "realtime ",
+        front_end.name(),
+        ": acquisition region ",
+        region,
+        ": ",
+        detected,
+        " of ",
+        SKY.len(),
+        " PRNs detected (+-2 kHz about the predicted Doppler, ",
+        ACQUISITION_MS,
+        " ms non-coherent, on bit planes)"
+    );
     detected
+}
+
+/// Every PRN of the sky searched on `samples` (the reference antenna's, from sample `first`)
+/// about its predicted Doppler: `None` for a sky entry that is no PRN.
+#[inline(never)]
+#[optimize(size)]
+fn search_sky(rx: &mut Front, samples: SearchSamples<'_>, first: u64) -> [Option<Result<SearchResult, ReceiverError>>; SKY.len()] {
+    core::array::from_fn(|s| SKY.get(s).and_then(|&(prn, _, _)| Prn::new(prn).map(|prn| rx.search_samples_near(prn, samples, first, predicted_doppler_hz(s)))))
 }
 
 /// The whole run of one front end: the receiver built (on the stack, bound inside its
 /// `Result`: one copy of its 78 KB), then [`stream`] in a frame of its own.
 #[inline(never)]
+#[optimize(size)]
 pub fn run(front_end: FrontEnd) -> Outcome {
     // (through an opaque function pointer: `new` keeps a frame of its own instead of
     // inlining its temporaries into this one)
@@ -222,7 +263,7 @@ pub fn run(front_end: FrontEnd) -> Outcome {
             out
         }
         Err(e) => {
-            hprintln!("realtime {}: receiver refused its configuration: {:?}", front_end.name(), e);
+            say!("realtime ", front_end.name(), ": receiver configuration ", Refusal(&*e));
             Outcome {
                 fine_at: None,
                 regions: (0, 0),
@@ -244,6 +285,7 @@ pub fn run(front_end: FrontEnd) -> Outcome {
 /// The stack below this frame is painted again first: the stream's own high-water mark is
 /// reported apart from the construction's.
 #[inline(never)]
+#[optimize(size)]
 fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
     let mut bytes = [[0u8; BLOCK_BYTES]; 3];
     let block_bytes = front_end.block_bytes();
@@ -274,7 +316,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
 
     let mut refusals = 0u32;
     if CODE_TABLE.step() != CodeNco::step_for(CA_CHIP_RATE_HZ, SAMPLE_RATE_HZ) {
-        hprintln!("realtime {}: code table step {} is not the sample rate's", front_end.name(), CODE_TABLE.step());
+        say!("realtime ", front_end.name(), ": code table step ", CODE_TABLE.step(), " is not the sample rate's");
         refusals += 1;
     }
     let mut total = SampleReport::default();
@@ -333,7 +375,7 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
                 total.released += r.released;
             }
             Err(e) => {
-                hprintln!("realtime {}: push_samples refused at epoch {}: {:?}", front_end.name(), e0, e);
+                say!("realtime ", front_end.name(), ": push_samples at epoch ", e0, ": ", e);
                 refusals += 1;
                 break;
             }
@@ -341,24 +383,28 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         let att = rx.attitude();
         if out.fine_at.is_none() && att.source == AttitudeSource::Fine {
             out.fine_at = Some(e0 + BLOCK_MS as u64);
-            hprintln!(
-                "realtime {}: fine attitude at epoch {} ({} observations, {} channels locked)",
+            say!(
+                "realtime ",
                 front_end.name(),
+                ": fine attitude at epoch ",
                 e0 + BLOCK_MS as u64,
+                " (",
                 total.observations,
-                rx.channels().filter(|c| c.locked).count()
+                " observations, ",
+                rx.channels().filter(|c| c.locked).count(),
+                " channels locked)"
             );
         }
         if out.fine_at.is_some() && (e0 + BLOCK_MS as u64) % 100 == 0 {
             let e = att.q_rb.angle_to(&synth.truth(att.epoch)).to_degrees();
             let sigma = nalgebra::ComplexField::sqrt(att.covariance.trace().max(0.0)).to_degrees();
-            hprintln!("realtime {}: epoch {} source {:?} error {} deg (1 sigma {} deg)", front_end.name(), att.epoch, att.source, fixed(e, 4), fixed(sigma, 4));
+            say!("realtime ", front_end.name(), ": epoch ", att.epoch, " source ", att.source, " error ", fixed(e, 4), " deg (1 sigma ", fixed(sigma, 4), " deg)");
         }
         if out.counted_ms >= COUNT_MS {
             break;
         }
         if out.fine_at.is_none() && e0 >= WARM_UP_MAX_MS {
-            hprintln!("realtime {}: no fine attitude after {} ms", front_end.name(), e0);
+            say!("realtime ", front_end.name(), ": no fine attitude after ", e0, " ms");
             break;
         }
     }
@@ -374,20 +420,32 @@ fn stream(front_end: FrontEnd, rx: &mut Front) -> Outcome {
         && out.error_deg <= LIMIT_DEG
         && refusals == 0;
     let cn0 = rx.channels().map(|c| c.cn0_dbhz).fold(0.0f32, |a, c| a + c) / rx.channels().count().max(1) as f32;
-    hprintln!(
-        "realtime {}: {} of {} satellites acquired, {} channels locked (mean C/N0 {} dB-Hz), {} observations, {} late, {} without aiding, {} channels released, {} deferred overruns ({} of the checks), {} calls refused",
+    say!(
+        "realtime ",
         front_end.name(),
+        ": ",
         detected,
+        " of ",
         SKY.len(),
+        " satellites acquired, ",
         rx.channels().filter(|c| c.locked).count(),
+        " channels locked (mean C/N0 ",
         fixed(cn0, 1),
+        " dB-Hz), ",
         total.observations,
+        " observations, ",
         total.late,
+        " late, ",
         total.without_aiding,
+        " without aiding, ",
         total.released,
+        " channels released, ",
         rx.receiver().deferred_overruns(),
+        " deferred overruns (",
         rx.check_overruns(),
-        refusals
+        " of the checks), ",
+        refusals,
+        " calls refused"
     );
     out
 }

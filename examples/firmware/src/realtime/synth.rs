@@ -113,6 +113,7 @@ fn data_bit(s: usize, b: u32) -> f32 {
 
 impl Synth {
     /// The generator at sample 0, noise seed `seed`.
+    #[optimize(size)]
     pub fn new(seed: u32) -> Self {
         let flight = ExampleFlight::new(7);
         let sats = core::array::from_fn(|s| {
@@ -164,6 +165,7 @@ impl Synth {
 
     /// Sets every satellite's per-antenna phase offset to the geometry of epoch `epoch`:
     /// `(μ·C_rb r_P)/λ + b_P` (`b_A = 0`).
+    #[optimize(size)]
     pub fn set_geometry(&mut self, epoch: u64) {
         let c_rb = self.flight.attitude(epoch).to_dcm();
         let positions = antennas().map(Vector3::from);
@@ -179,6 +181,7 @@ impl Synth {
     }
 
     /// Advances the stream by `n` samples without producing them.
+    #[optimize(size)]
     pub fn skip(&mut self, n: u64) {
         for (s, sat) in self.sats.iter_mut().enumerate() {
             let total = sat.code_phase as u128 + sat.code_step as u128 * n as u128;
@@ -207,6 +210,7 @@ impl Synth {
     /// The stream's next complex samples of the three antennas as the front end delivers
     /// them, `out[0].len()` bytes of each ([`FrontEnd::sample_format`]: `bit1iq` or `sm2iq`,
     /// first sample in the most significant bits), one stream per antenna.
+    #[optimize(size)]
     pub fn fill_bytes(&mut self, front_end: FrontEnd, out: [&mut [u8]; 3]) {
         let per_byte = front_end.samples_per_byte();
         let len = per_byte * out[0].len();
@@ -222,6 +226,7 @@ impl Synth {
     /// Generates the next `len` samples of the first `antennas` antennas in chunks of
     /// [`CHUNK`] (even, so that byte outputs stay aligned): `out(antenna, first, re, im)` takes
     /// each chunk's analog components (noise σ = 1).
+    #[optimize(size)]
     fn generate(&mut self, antennas: usize, len: usize, mut out: impl FnMut(usize, usize, &[f32], &[f32])) {
         let mut start = 0;
         while start < len {
