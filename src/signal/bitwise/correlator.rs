@@ -151,7 +151,10 @@ pub const COMPLEX_TWO_LEVEL_KERNELS: u8 =
     kernel_bit_of(true, false, false) | kernel_bit_of(true, true, false);
 
 /// The kernel bits of the 3-level carrier.
-const THREE_LEVEL_KERNELS: u8 = 0b1010_1010;
+const THREE_LEVEL_KERNELS: u8 = kernel_bit_of(false, false, true)
+    | kernel_bit_of(false, true, true)
+    | kernel_bit_of(true, false, true)
+    | kernel_bit_of(true, true, true);
 
 /// The bit-parallel correlator of one satellite over `A` antennas.
 ///
@@ -617,6 +620,7 @@ impl<const A: usize, const KERNELS: u8> BitCorrelator<A, KERNELS> {
             .wrapping_sub(self.carrier.step.wrapping_mul(lead as u32));
         let step = CarrierStep::new(self.carrier.step);
         let words = work.carrier.get_mut(..nw).unwrap_or_default();
+        // (a call per level: each inlines `fill` with its level a constant)
         if self.three_level() {
             carrier::fill(words, CarrierLevels::Three, phase, &step);
         } else {
