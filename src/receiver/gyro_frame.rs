@@ -170,7 +170,8 @@ impl GyroFrame {
     /// Takes one increment (rad, gyro axes): corrected by the bias estimate, propagated, and
     /// passed (uncorrected; the calibrator applies the correction itself) to the calibrator.
     /// An increment above the maximum rate is a fault: the last good rate is propagated
-    /// instead, the calibration window is abandoned, and `false` is returned.
+    /// instead, the calibration window is abandoned, and `false` is returned. Unchanged on
+    /// error (every refusal comes before the first change).
     pub fn push(&mut self, theta: &Vector3<f32>) -> Result<bool, ReceiverError> {
         if !theta.iter().all(|v| v.is_finite()) {
             return Err(ReceiverError::NonFinite);

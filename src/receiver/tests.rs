@@ -229,6 +229,11 @@ fn bad_inputs_are_refused_and_leave_the_receiver_unchanged() {
     let mut r = AttitudeReceiver::new(ExampleFlight::config(true)).unwrap();
     f.fly(&mut r, 0, 300).unwrap();
     let before = r.attitude();
+    let gyro_state = |r: &AttitudeReceiver| {
+        let g = r.gyro.as_ref().expect("a gyro");
+        (g.samples(), g.at_step(), g.calibrating(), g.report)
+    };
+    let gyro_before = gyro_state(&r);
     let mut obs = f.observations(300)[0];
     obs.prompt.i[1] = f32::NAN;
     assert_eq!(r.push_observation(300, &obs), Err(ReceiverError::NonFinite));
@@ -264,6 +269,7 @@ fn bad_inputs_are_refused_and_leave_the_receiver_unchanged() {
     aiding[0].los = [2.0, 0.0, 0.0];
     assert_eq!(r.set_aiding(&aiding), Err(ReceiverError::InvalidInput));
     assert_eq!(r.attitude(), before);
+    assert_eq!(gyro_state(&r), gyro_before);
     // a degenerate array is refused at construction
     let mut cfg = ExampleFlight::config(true);
     cfg.antennas_m[2] = cfg.antennas_m[1];
