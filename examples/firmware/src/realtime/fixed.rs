@@ -2,7 +2,7 @@
 //! the firmware links neither core's float formatting (`flt2dec`, its Grisu and Dragon tables
 //! and code: about 20 KiB of flash) nor the rest of `core::fmt` ([`super::say`]).
 
-use super::say::{Line, Say};
+use super::say::{decimal, Line, Say};
 
 /// A value printed with a fixed number of decimals (at most 6), rounded half away from zero;
 /// `NaN` and magnitudes beyond 10¹² as `NaN` and `inf`.
@@ -39,18 +39,10 @@ impl Say for Fixed {
         if m != 0 {
             line.bytes(sign);
         }
-        (m / scale).say(line);
-        if self.decimals == 0 {
-            return;
+        decimal(line, m / scale, 1);
+        if self.decimals > 0 {
+            line.bytes(b".");
+            decimal(line, m % scale, self.decimals as usize);
         }
-        line.bytes(b".");
-        // the fraction's digits, leading zeros kept: 10^decimals + fraction without its 1
-        let mut digits = [0u8; 7];
-        let mut f = m % scale + scale;
-        for d in digits[..=self.decimals as usize].iter_mut().rev() {
-            *d = b'0' + (f % 10) as u8;
-            f /= 10;
-        }
-        line.bytes(&digits[1..=self.decimals as usize]);
     }
 }

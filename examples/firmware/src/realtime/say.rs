@@ -86,22 +86,27 @@ impl Say for bool {
 }
 
 impl Say for u64 {
-    #[inline(never)]
-    #[optimize(size)]
     fn say(&self, line: &mut Line) {
-        let mut digits = [0u8; 20];
-        let mut v = *self;
-        let mut first = digits.len();
-        loop {
-            first -= 1;
-            digits[first] = b'0' + (v % 10) as u8;
-            v /= 10;
-            if v == 0 {
-                break;
-            }
-        }
-        line.bytes(&digits[first..]);
+        decimal(line, *self, 1);
     }
+}
+
+/// Appends `v` in decimal with at least `width` digits (leading zeros; at most 20).
+#[inline(never)]
+#[optimize(size)]
+pub fn decimal(line: &mut Line, v: u64, width: usize) {
+    let mut digits = [b'0'; 20];
+    let mut v = v;
+    let mut first = digits.len();
+    loop {
+        first -= 1;
+        digits[first] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    line.bytes(&digits[first.min(digits.len().saturating_sub(width))..]);
 }
 
 /// Unsigned integers narrower than `u64`, shown as `u64`.
