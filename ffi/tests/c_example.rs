@@ -10,8 +10,28 @@ use gnss_attitude::formats::record::AttitudeRecord;
 use gnss_attitude::receiver::example::ExampleFlight;
 use gnss_attitude::receiver::{AttitudeReceiver, AttitudeSource};
 
-/// The static library cargo built next to the test binary's `deps/` directory.
-fn staticlib() -> PathBuf {
+/// The static library of the build that made this test: `cargo test` builds the library's
+/// `staticlib` crate type beside its rlib in `deps/` (with the build's hash in the name) but
+/// does not copy it up to `target/<profile>/`. The newest one is this build's (a rebuild of
+/// the code rebuilds it); `None` when there is none.
+fn staticlib_in_deps() -> Option<PathBuf> {
+    let exe = std::env::current_exe().expect("test executable path");
+    let deps = exe.parent().expect("target/<profile>/deps/<test>");
+    std::fs::read_dir(deps)
+        .ok()?
+        .filter_map(Result::ok)
+        .filter(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            name.starts_with("libgnss_attitude_ffi-") && name.ends_with(".a")
+        })
+        .filter_map(|e| Some((e.metadata().ok()?.modified().ok()?, e.path())))
+        .max()
+        .map(|(_, path)| path)
+}
+
+/// The static library `cargo build` puts in `target/<profile>/`.
+fn staticlib_built() -> PathBuf {
     let exe = std::env::current_exe().expect("test executable path");
     let profile_dir = exe
         .parent()
@@ -20,9 +40,9 @@ fn staticlib() -> PathBuf {
     profile_dir.join("libgnss_attitude_ffi.a")
 }
 
-/// `cargo test` builds the library only as the rlib the test links; the C example needs the
-/// staticlib of the same profile, so build it (the test build has released the target lock).
-fn build_staticlib(root: &Path) {
+/// Builds the staticlib with `cargo build` (only when the test's own build left none: it
+/// resolves features on its own, so it compiles the core again).
+fn build_staticlib(root: &Path) -> PathBuf {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut build = Command::new(cargo);
     build
@@ -33,14 +53,12 @@ fn build_staticlib(root: &Path) {
     }
     let status = build.status().expect("run cargo build for the staticlib");
     assert!(status.success(), "cargo build of the staticlib failed");
+    staticlib_built()
 }
 
 fn build_and_run() -> (std::process::ExitStatus, String) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let lib = staticlib();
-    if !lib.exists() {
-        build_staticlib(&root);
-    }
+    let lib = staticlib_in_deps().unwrap_or_else(|| build_staticlib(&root));
     assert!(lib.exists(), "static library not built: {}", lib.display());
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-scenario");
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
