@@ -12,10 +12,12 @@ use gnss_attitude::receiver::{AttitudeReceiver, AttitudeSource};
 
 /// The static library of the build that made this test: `cargo test` builds the library's
 /// `staticlib` crate type beside its rlib in `deps/` (with the build's hash in the name) but
-/// does not copy it up to `target/<profile>/`. The newest one is this build's (a rebuild of
-/// the code rebuilds it); `None` when there is none.
+/// does not copy it up to `target/<profile>/`. This build's is the newest one not newer than
+/// the test executable (linked after it; another feature resolution's, built later by another
+/// command, is newer); `None` when there is none.
 fn staticlib_in_deps() -> Option<PathBuf> {
     let exe = std::env::current_exe().expect("test executable path");
+    let linked = std::fs::metadata(&exe).ok()?.modified().ok()?;
     let deps = exe.parent().expect("target/<profile>/deps/<test>");
     std::fs::read_dir(deps)
         .ok()?
@@ -26,6 +28,7 @@ fn staticlib_in_deps() -> Option<PathBuf> {
             name.starts_with("libgnss_attitude_ffi-") && name.ends_with(".a")
         })
         .filter_map(|e| Some((e.metadata().ok()?.modified().ok()?, e.path())))
+        .filter(|(built, _)| *built <= linked)
         .max()
         .map(|(_, path)| path)
 }
