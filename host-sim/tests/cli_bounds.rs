@@ -3,7 +3,6 @@
 //! reads at most its cap; a `--seconds` or `--ms` beyond the recording is said plainly. Every
 //! refusal exits non-zero and names the option and its range.
 
-use std::path::PathBuf;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
@@ -14,10 +13,13 @@ fn host_sim(args: &[&str]) -> Output {
         .unwrap()
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("host-sim-bounds-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh directory in the system's temporary directory, removed with its files when the
+/// test ends, passed or failed (a run writes about 26 MB).
+fn temp_dir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("host-sim-bounds-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// Asserts a non-zero exit whose stderr contains every one of `words`.
@@ -37,7 +39,8 @@ fn synth_args<'a>(dir: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
 
 #[test]
 fn synth_fs_0_is_refused_instead_of_writing_nan() {
-    let dir = temp_dir("fs0");
+    let tmp = temp_dir("fs0");
+    let dir = tmp.path();
     let d = dir.to_str().unwrap();
     let out = host_sim(&synth_args(d, &["--fs", "0", "--seconds", "0.01"]));
     refused(&out, &["--fs", "(0, 64000000]"]);
@@ -46,7 +49,8 @@ fn synth_fs_0_is_refused_instead_of_writing_nan() {
 
 #[test]
 fn synth_if_nan_and_cn0_nan_are_refused() {
-    let dir = temp_dir("nan");
+    let tmp = temp_dir("nan");
+    let dir = tmp.path();
     let d = dir.to_str().unwrap();
     let out = host_sim(&synth_args(
         d,
@@ -67,7 +71,8 @@ fn synth_if_nan_and_cn0_nan_are_refused() {
 
 #[test]
 fn synth_seconds_1e9_and_fs_1e12_are_refused_before_writing() {
-    let dir = temp_dir("huge");
+    let tmp = temp_dir("huge");
+    let dir = tmp.path();
     let d = dir.to_str().unwrap();
     let started = Instant::now();
     let out = host_sim(&synth_args(d, &["--fs", "2.6e6", "--seconds", "1e9"]));
@@ -117,7 +122,8 @@ fn acquire_and_track_refuse_xcorr_margin_nan() {
 
 #[test]
 fn track_sky_dev_zero_is_refused_fast_without_growing() {
-    let dir = temp_dir("sky");
+    let tmp = temp_dir("sky");
+    let dir = tmp.path();
     let big = dir.join("big.sky.csv");
     // a syntactically valid sky file, but 100 kB of it
     std::fs::write(&big, "1,10.0,45.0\n".repeat(9000)).unwrap();
@@ -156,7 +162,8 @@ fn track_sky_dev_zero_is_refused_fast_without_growing() {
 
 #[test]
 fn track_seconds_and_ms_beyond_the_recording_say_what_they_do() {
-    let dir = temp_dir("short");
+    let tmp = temp_dir("short");
+    let dir = tmp.path();
     let d = dir.to_str().unwrap();
     let out = host_sim(&synth_args(
         d,
@@ -223,7 +230,8 @@ fn track_seconds_and_ms_beyond_the_recording_say_what_they_do() {
 
 #[test]
 fn track_on_a_recording_longer_than_5_s_shows_progress_on_stderr_only() {
-    let dir = temp_dir("progress");
+    let tmp = temp_dir("progress");
+    let dir = tmp.path();
     let d = dir.to_str().unwrap();
     let out = host_sim(&synth_args(
         d,
