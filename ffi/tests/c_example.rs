@@ -33,16 +33,6 @@ fn staticlib_in_deps() -> Option<PathBuf> {
         .map(|(_, path)| path)
 }
 
-/// The static library `cargo build` puts in `target/<profile>/`.
-fn staticlib_built() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    let profile_dir = exe
-        .parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>/deps/<test>");
-    profile_dir.join("libgnss_attitude_ffi.a")
-}
-
 /// Builds the staticlib with `cargo build` (only when the test's own build left none: it
 /// resolves features on its own, so it compiles the core again).
 fn build_staticlib(root: &Path) -> PathBuf {
@@ -56,7 +46,13 @@ fn build_staticlib(root: &Path) -> PathBuf {
     }
     let status = build.status().expect("run cargo build for the staticlib");
     assert!(status.success(), "cargo build of the staticlib failed");
-    staticlib_built()
+    // `cargo build` puts it in `target/<profile>/`, beside the test's `deps/`.
+    let exe = std::env::current_exe().expect("test executable path");
+    let profile_dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps/<test>");
+    profile_dir.join("libgnss_attitude_ffi.a")
 }
 
 fn build_and_run() -> (std::process::ExitStatus, String) {
